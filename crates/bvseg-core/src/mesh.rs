@@ -1,0 +1,124 @@
+//! The input: a triangle mesh, validated once so that later stages can trust it.
+use glam::{DVec3, Vec3};
+
+use crate::Error;
+
+/// Coordinates beyond this magnitude are rejected: products of three of them (volumes) must
+/// stay far from f64 overflow.
+pub const MAX_COORDINATE: f64 = 1e100;
+
+/// A triangle mesh: positions and vertex-index triples. The solid is what the surface
+/// encloses; orientation may be outward or inward, and several shells are allowed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    vertices: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Build a mesh, checking that it has triangles, that every coordinate is finite and
+    /// below [`MAX_COORDINATE`] in magnitude, and that every index is in range.
+    pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, Error> {
+        if triangles.is_empty() {
+            return Err(Error::NoTriangles);
+        }
+        if let Some(index) = vertices
+            .iter()
+            .position(|v| !v.is_finite() || v.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(Error::BadVertex { index });
+        }
+        let count = vertices.len();
+        for (index, t) in triangles.iter().enumerate() {
+            if let Some(&vertex) = t.iter().find(|&&v| v as usize >= count) {
+                return Err(Error::BadIndex { index, vertex, count });
+            }
+        }
+        Ok(Self { vertices, triangles })
+    }
+
+    /// Like [`Mesh::new`] from single-precision positions, as most engines store them.
+    pub fn from_f32(vertices: &[Vec3], triangles: Vec<[u32; 3]>) -> Result<Self, Error> {
+        Self::new(vertices.iter().map(|v| v.as_dvec3()).collect(), triangles)
+    }
+
+    /// Vertex positions.
+    pub fn vertices(&self) -> &[DVec3] {
+        &self.vertices
+    }
+
+    /// Triangles as vertex-index triples.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The three corners of triangle `t`.
+    #[inline]
+    pub fn corners(&self, t: usize) -> [DVec3; 3] {
+        let [a, b, c] = self.triangles[t];
+        [
+            self.vertices[a as usize],
+            self.vertices[b as usize],
+            self.vertices[c as usize],
+        ]
+    }
+
+    /// Axis-aligned bounding box of the vertices that triangles use.
+    pub fn bbox(&self) -> (DVec3, DVec3) {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for t in &self.triangles {
+            for &v in t {
+                let p = self.vertices[v as usize];
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Signed volume by the divergence theorem (positive for outward-facing closed meshes).
+    /// Computed relative to the box centre to limit cancellation.
+    pub fn signed_volume(&self) -> f64 {
+        let (lo, hi) = self.bbox();
+        let c = 0.5 * (lo + hi);
+        self.triangles
+            .iter()
+            .enumerate()
+            .map(|(t, _)| {
+                let [a, b, d] = self.corners(t);
+                (a - c).dot((b - c).cross(d - c)) / 6.0
+            })
+            .sum()
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|t| {
+                let [a, b, c] = self.corners(t);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_bad_input() {
+        assert_eq!(Mesh::new(vec![], vec![]), Err(Error::NoTriangles));
+        let v = vec![DVec3::ZERO, DVec3::X, DVec3::new(f64::NAN, 0.0, 0.0)];
+        assert_eq!(
+            Mesh::new(v, vec![[0, 1, 2]]),
+            Err(Error::BadVertex { index: 2 })
+        );
+        let v = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+        assert!(matches!(
+            Mesh::new(v, vec![[0, 1, 3]]),
+            Err(Error::BadIndex { vertex: 3, .. })
+        ));
+    }
+}

@@ -1,0 +1,111 @@
+//! What [`crate::segment`] returns.
+use crate::{BoundingKind, BoundingVolume};
+
+/// One part of the segmentation and its bounding volume.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Part {
+    /// The part's bounding volume.
+    pub volume: BoundingVolume,
+    /// Share of the solid's volume in this part (the fractions sum to 1).
+    pub fraction: f64,
+    /// Number of interior samples in the part.
+    pub samples: usize,
+    /// Outside volume of this part's bounding volume relative to the part's volume, OV_i,
+    /// measured on the sampling lattice.
+    pub ov: f64,
+    /// e-tightness of the part (1 for an ellipsoid, about 1.127 for a box).
+    pub e: f64,
+}
+
+/// Summary figures of a segmentation, measured on the sampling lattice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Metrics {
+    /// Number of parts.
+    pub k: usize,
+    /// The paper's functional F(P) >= 1 (1 when every part is an ellipsoid).
+    pub f: f64,
+    /// Total outside volume: vol(union of volumes minus solid) / vol(solid).
+    pub tov: f64,
+    /// Largest per-part outside volume.
+    pub mov: f64,
+    /// Number of interior samples.
+    pub samples: usize,
+}
+
+/// What a refinement step did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StepKind {
+    /// The first optimised partition (k parts from the initialisation).
+    Initial,
+    /// A part was split and the partition re-optimised.
+    Split,
+    /// A split made TOV worse and was undone; another part is tried next.
+    Backtrack,
+    /// Two adjacent parts were merged.
+    Merge,
+    /// The final bounding volumes (minimum-volume ellipsoids / boxes) were fitted.
+    Final,
+}
+
+impl StepKind {
+    /// Lower-case name, as written to JSON.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StepKind::Initial => "initial",
+            StepKind::Split => "split",
+            StepKind::Backtrack => "backtrack",
+            StepKind::Merge => "merge",
+            StepKind::Final => "final",
+        }
+    }
+}
+
+/// One entry of the refinement history.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// What happened.
+    pub kind: StepKind,
+    /// Number of parts after the step.
+    pub k: usize,
+    /// F(P) after the step.
+    pub f: f64,
+    /// TOV after the step (with the refinement's bounding volumes; the final step uses the
+    /// output volumes).
+    pub tov: f64,
+    /// MOV after the step.
+    pub mov: f64,
+}
+
+/// A node of the bounding-volume hierarchy. Leaves are parts; inner nodes bound their two
+/// children's parts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HierarchyNode {
+    /// The node's bounding volume (of the kind requested; for `mixed`, the smaller).
+    pub volume: BoundingVolume,
+    /// For a leaf, the part index.
+    pub part: Option<usize>,
+    /// For an inner node, the indices of its two children in [`Segmentation::hierarchy`].
+    pub children: Option<[usize; 2]>,
+}
+
+/// The result of [`crate::segment`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segmentation {
+    /// The bounding-volume kind that was requested.
+    pub kind: BoundingKind,
+    /// The parts, each with its bounding volume.
+    pub parts: Vec<Part>,
+    /// Summary figures.
+    pub metrics: Metrics,
+    /// Every refinement step, in order.
+    pub history: Vec<Step>,
+    /// Binary hierarchy over the parts; the root is the last node (empty when k = 1... no:
+    /// with one part the hierarchy is that single leaf).
+    pub hierarchy: Vec<HierarchyNode>,
+    /// For each input triangle, the part whose volume encloses it.
+    pub triangle_parts: Vec<u32>,
+    /// For each interior sample, its part.
+    pub sample_parts: Vec<u32>,
+    /// The lattice cell size that was used.
+    pub cell_size: f64,
+}

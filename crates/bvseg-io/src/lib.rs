@@ -1,0 +1,1 @@
+//! Mesh loading and result writing for bvseg.
