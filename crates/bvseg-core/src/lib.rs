@@ -44,6 +44,7 @@ pub mod refinement;
 mod result;
 pub mod rng;
 pub mod sampling;
+pub mod shapes;
 mod volume;
 
 pub use error::Error;
