@@ -47,9 +47,10 @@ pub fn is_connected(grid: &Grid, labels: &[u32], solid_components: &[u32]) -> bo
     let (piece, _) = pieces(grid, labels);
     // A part is connected iff it has exactly one piece per solid component it touches.
     let mut first: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
-    labels.iter().enumerate().all(|(s, &l)| {
-        *first.entry((l, solid_components[s])).or_insert(piece[s]) == piece[s]
-    })
+    labels
+        .iter()
+        .enumerate()
+        .all(|(s, &l)| *first.entry((l, solid_components[s])).or_insert(piece[s]) == piece[s])
 }
 
 #[derive(PartialEq)]

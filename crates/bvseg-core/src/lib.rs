@@ -25,6 +25,8 @@
 //! [`assignment`] / [`flooding`] -> [`optimization`] -> [`refinement`] -> [`bounding`] /
 //! [`enclosure`] -> [`metrics`] -> [`hierarchy`].
 #![warn(missing_docs)]
+// Index loops over 3x3 matrices and parallel arrays read more clearly than iterator chains.
+#![allow(clippy::needless_range_loop)]
 
 pub mod assignment;
 pub mod bounding;

@@ -185,7 +185,8 @@ mod tests {
         let r = 40;
         let brute = (c[2] - r..=c[2] + r)
             .flat_map(|k| {
-                (c[1] - r..=c[1] + r).flat_map(move |j| (c[0] - r..=c[0] + r).map(move |i| (i, j, k)))
+                (c[1] - r..=c[1] + r)
+                    .flat_map(move |j| (c[0] - r..=c[0] + r).map(move |i| (i, j, k)))
             })
             .filter(|&(i, j, k)| v.contains(g.cell_center(i, j, k)))
             .count();

@@ -133,7 +133,7 @@ pub fn inv_packed(c: &[f64; 6]) -> Option<[f64; 6]> {
     let a01 = xz * yz - xy * zz;
     let a02 = xy * yz - xz * yy;
     let det = xx * a00 + xy * a01 + xz * a02;
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return None;
     }
     let inv = 1.0 / det;

@@ -86,13 +86,19 @@ pub fn lloyd(
                 part.labels[su] = l;
             }
         }
-        let fixed = make_connected(&solid.grid, &mut part.labels, comps, Some(&samples), |s, j| {
-            if is_active[j as usize] {
-                metrics[j as usize].cost(solid.q[s], rule)
-            } else {
-                f64::INFINITY
-            }
-        });
+        let fixed = make_connected(
+            &solid.grid,
+            &mut part.labels,
+            comps,
+            Some(&samples),
+            |s, j| {
+                if is_active[j as usize] {
+                    metrics[j as usize].cost(solid.q[s], rule)
+                } else {
+                    f64::INFINITY
+                }
+            },
+        );
         for (s, before) in fixed {
             if prev[s as usize] == NONE {
                 prev[s as usize] = before;
@@ -224,11 +230,7 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
             queue.push_back(s);
         }
     }
-    let mut terms: Vec<f64> = part
-        .parts
-        .iter()
-        .map(|m| m.f_term(CELL_VAR, 1.0))
-        .collect();
+    let mut terms: Vec<f64> = part.parts.iter().map(|m| m.f_term(CELL_VAR, 1.0)).collect();
     let mut moves = 0;
     // Each move lowers F strictly, so this terminates; the cap bounds pathological cases.
     let cap = 20 * n + 1000;

@@ -294,9 +294,7 @@ impl Segmenter {
                 self.params.max_sweeps,
             );
             let cand = self.evaluate(part);
-            let Some(cur) = self.state.as_ref() else {
-                return None;
-            };
+            let cur = self.state.as_ref()?;
             // A split is kept if it improves the figure that is out of tolerance.
             let better = if cur.tov >= self.params.tov {
                 cand.tov < cur.tov

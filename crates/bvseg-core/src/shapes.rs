@@ -159,7 +159,11 @@ mod tests {
     fn generated_meshes_are_closed_and_outward() {
         let pi = std::f64::consts::PI;
         let cases = [
-            (cuboid(DVec3::ONE, DVec3::new(1.0, 2.0, 3.0), DMat3::IDENTITY), 48.0, 1e-9),
+            (
+                cuboid(DVec3::ONE, DVec3::new(1.0, 2.0, 3.0), DMat3::IDENTITY),
+                48.0,
+                1e-9,
+            ),
             (
                 ellipsoid(DVec3::ZERO, DVec3::new(1.0, 2.0, 3.0), DMat3::IDENTITY, 64),
                 4.0 / 3.0 * pi * 6.0,
@@ -170,7 +174,11 @@ mod tests {
                 pi * 0.25 * 2.0 + 4.0 / 3.0 * pi * 0.125,
                 0.02,
             ),
-            (torus(DVec3::ZERO, 2.0, 0.5, 64), 2.0 * pi * pi * 2.0 * 0.25, 0.02),
+            (
+                torus(DVec3::ZERO, 2.0, 0.5, 64),
+                2.0 * pi * pi * 2.0 * 0.25,
+                0.02,
+            ),
         ];
         for (m, vol, tol) in cases {
             let v = m.signed_volume();
