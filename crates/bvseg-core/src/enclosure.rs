@@ -56,9 +56,110 @@ fn nearest_sample_field(solid: &Solid) -> Vec<u32> {
     near
 }
 
-/// The part of each triangle: the part of the sample nearest the triangle's centroid (among
-/// the grid-nearest samples of the 27 cells around it).
-pub fn assign_triangles(mesh: &Mesh, solid: &Solid, labels: &[u32]) -> Vec<u32> {
+/// Which triangles and points each part must enclose.
+///
+/// A triangle belongs to the part of the sample nearest its centroid (among the grid-nearest
+/// samples of the 27 cells around it). That sample does not depend on the partition, so it
+/// is found once; a part's triangles are then those of its samples.
+#[derive(Debug, Clone)]
+pub struct Enclosure {
+    /// For each triangle, its nearest sample.
+    pub triangle_sample: Vec<u32>,
+    /// CSR lists of the triangles whose nearest sample is each sample.
+    offsets: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl Enclosure {
+    /// Find each triangle's nearest sample.
+    pub fn new(mesh: &Mesh, solid: &Solid) -> Self {
+        let triangle_sample = nearest_samples(mesh, solid);
+        let n = solid.len();
+        let mut offsets = vec![0u32; n + 1];
+        for &s in &triangle_sample {
+            offsets[s as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut triangles = vec![0u32; triangle_sample.len()];
+        for (t, &s) in triangle_sample.iter().enumerate() {
+            triangles[fill[s as usize] as usize] = t as u32;
+            fill[s as usize] += 1;
+        }
+        Self {
+            triangle_sample,
+            offsets,
+            triangles,
+        }
+    }
+
+    /// The part of each triangle under `labels`.
+    pub fn triangle_parts(&self, labels: &[u32]) -> Vec<u32> {
+        self.triangle_sample
+            .iter()
+            .map(|&s| labels[s as usize])
+            .collect()
+    }
+
+    /// The triangles whose nearest sample is `s`.
+    pub fn triangles_of(&self, s: usize) -> &[u32] {
+        &self.triangles[self.offsets[s] as usize..self.offsets[s + 1] as usize]
+    }
+
+    /// The world-space points that part `label` (with samples `members`) must enclose, less
+    /// those that cannot be on their convex hull: its samples on the part's boundary (a
+    /// sample whose six neighbours are all in the part lies inside their hull), the centres
+    /// of the cell faces it shares with other parts, and the corners of its triangles.
+    pub fn points(
+        &self,
+        mesh: &Mesh,
+        solid: &Solid,
+        labels: &[u32],
+        members: &[u32],
+        label: u32,
+    ) -> Vec<DVec3> {
+        self.points_with(mesh, solid, |s| labels[s], members, label)
+    }
+
+    /// Like [`Enclosure::points`], with the labelling given as a function.
+    pub fn points_with(
+        &self,
+        mesh: &Mesh,
+        solid: &Solid,
+        label_of: impl Fn(usize) -> u32,
+        members: &[u32],
+        label: u32,
+    ) -> Vec<DVec3> {
+        let g = &solid.grid;
+        let mut pts = Vec::new();
+        for &s in members {
+            let s = s as usize;
+            let p = g.points[s];
+            let mut interior = true;
+            for &t in &g.neighbors[s] {
+                if t == NONE {
+                    interior = false;
+                } else if label_of(t as usize) != label {
+                    interior = false;
+                    pts.push(0.5 * (p + g.points[t as usize]));
+                }
+            }
+            if !interior {
+                pts.push(p);
+            }
+            for &t in self.triangles_of(s) {
+                pts.extend(mesh.corners(t as usize));
+            }
+        }
+        pts
+    }
+}
+
+/// For each triangle, the sample nearest its centroid (among the grid-nearest samples of the
+/// 27 cells around the centroid's cell).
+fn nearest_samples(mesh: &Mesh, solid: &Solid) -> Vec<u32> {
     let g = &solid.grid;
     let near = nearest_sample_field(solid);
     let [nx, ny, nz] = g.dims;
@@ -102,33 +203,7 @@ pub fn assign_triangles(mesh: &Mesh, solid: &Solid, labels: &[u32]) -> Vec<u32> 
                     })
                     .unwrap_or(0);
             }
-            labels[best.1 as usize]
+            best.1
         })
         .collect()
-}
-
-/// The world-space points each of the `k` parts must enclose: its samples, the centres of
-/// the cell faces it shares with other parts, and the corners of its triangles.
-pub fn part_points(
-    mesh: &Mesh,
-    solid: &Solid,
-    labels: &[u32],
-    k: usize,
-    triangle_parts: &[u32],
-) -> Vec<Vec<DVec3>> {
-    let g = &solid.grid;
-    let mut pts = vec![Vec::new(); k];
-    for (s, &l) in labels.iter().enumerate() {
-        let p = g.points[s];
-        pts[l as usize].push(p);
-        for &t in &g.neighbors[s] {
-            if t != NONE && labels[t as usize] != l {
-                pts[l as usize].push(0.5 * (p + g.points[t as usize]));
-            }
-        }
-    }
-    for (t, &l) in triangle_parts.iter().enumerate() {
-        pts[l as usize].extend(mesh.corners(t));
-    }
-    pts
 }

@@ -32,6 +32,7 @@ pub mod assignment;
 pub mod bounding;
 pub mod enclosure;
 mod error;
+pub mod fitting;
 pub mod flooding;
 pub mod hierarchy;
 pub mod initialization;
@@ -47,6 +48,7 @@ mod result;
 pub mod rng;
 pub mod sampling;
 pub mod shapes;
+pub mod tightening;
 mod volume;
 
 pub use error::Error;

@@ -88,8 +88,8 @@ pub fn for_each_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(i64, i64
     }
 }
 
-/// Outside cells of one volume, as lattice coordinates.
-fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<[i64; 3]> {
+/// Lattice cells outside the solid whose centres `v` contains.
+pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<[i64; 3]> {
     let mut out = Vec::new();
     for_each_cell(grid, v, |i, j, k| {
         if grid.sample_at(i, j, k) == NONE {
@@ -112,6 +112,14 @@ pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) 
             volumes.iter().map(|v| outside_cells(grid, v)).collect()
         }
     };
+    outside_from_cells(
+        &per.iter().map(|c| c.as_slice()).collect::<Vec<_>>(),
+        counts,
+    )
+}
+
+/// TOV, OV and MOV from each volume's outside cells (see [`outside_cells`]).
+pub fn outside_from_cells(per: &[&[[i64; 3]]], counts: &[f64]) -> Outside {
     let total: f64 = counts.iter().sum();
     let ov: Vec<f64> = per
         .iter()
@@ -122,7 +130,7 @@ pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) 
     // The union: mark cells in a bitmap over the box of all outside cells.
     let mut lo = [i64::MAX; 3];
     let mut hi = [i64::MIN; 3];
-    for c in per.iter().flatten() {
+    for c in per.iter().copied().flatten() {
         for d in 0..3 {
             lo[d] = lo[d].min(c[d]);
             hi[d] = hi[d].max(c[d]);
@@ -136,7 +144,7 @@ pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) 
             (hi[2] - lo[2] + 1) as usize,
         ];
         let mut bits = vec![0u64; (n[0] * n[1] * n[2]).div_ceil(64)];
-        for c in per.iter().flatten() {
+        for c in per.iter().copied().flatten() {
             let idx = (c[0] - lo[0]) as usize
                 + n[0] * ((c[1] - lo[1]) as usize + n[1] * (c[2] - lo[2]) as usize);
             let (w, b) = (idx / 64, idx % 64);

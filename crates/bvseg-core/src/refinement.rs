@@ -11,31 +11,33 @@
 //! 4. Final: fit the output volumes (minimum-volume ellipsoids, boxes or the smaller of the
 //!    two) to each part's enclosure points, measure, and build the hierarchy.
 //!
-//! During steps 2-3 each part is bounded by its scaled Legendre ellipsoid (or principal-axes
-//! box for box output), which is cheap and close to the final volume.
+//! Beyond the paper, which judges steps 2-3 with scaled Legendre ellipsoids, every step is
+//! judged with the output volumes themselves, fitted to the points the output must enclose
+//! (see [`crate::enclosure`]): the tolerances then hold for what the user gets, not for a
+//! proxy. A part's fit depends only on its set of samples, so fits are cached by the part's
+//! exact moments and only the parts a step changed are refitted.
 use glam::DVec3;
 
-use crate::bounding::hull::hull_points;
-use crate::bounding::legendre::fast_volume;
-use crate::bounding::mvee::mvee;
-use crate::bounding::obb::min_obb;
-use crate::enclosure::{assign_triangles, part_points};
+use std::sync::Arc;
+
+use crate::fitting::{Fit, Fitter};
 use crate::flooding::solid_components;
 use crate::initialization::{cvt, split};
-use crate::metrics::outside_volumes;
+use crate::metrics::outside_from_cells;
+use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::partition::{Partition, Solid};
 use crate::sampling::Grid;
+use crate::tightening::tighten;
 use crate::{
-    hierarchy, BoundingKind, BoundingVolume, Error, Mesh, Metrics, Params, Part, Segmentation,
-    Shape, Step, StepKind,
+    hierarchy, BoundingVolume, Error, Mesh, Metrics, Params, Part, Segmentation, Step, StepKind,
 };
+
+/// Passes of the outside-volume tightening (see [`crate::tightening`]).
+pub const TIGHTEN_PASSES: usize = 30;
 
 /// How many parts a refinement step tries to split before keeping the first split anyway.
 pub const SPLIT_TRIES: usize = 4;
-
-/// Tolerance of the output ellipsoid fit (relative volume excess over the optimum).
-const MVEE_TOL: f64 = 1e-4;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -46,10 +48,11 @@ enum Phase {
     Done,
 }
 
-/// A partition with its refinement-time volumes and figures.
+/// A partition with its volumes and figures.
 #[derive(Debug, Clone)]
 struct State {
     part: Partition,
+    fits: Vec<Arc<Fit>>,
     volumes: Vec<BoundingVolume>,
     f: f64,
     tov: f64,
@@ -67,6 +70,7 @@ pub struct Segmenter {
     solid: Solid,
     comps: Vec<u32>,
     ncomp: usize,
+    fitter: Fitter,
     phase: Phase,
     state: Option<State>,
     /// Parts left to try in the current split step, and the first try's result.
@@ -89,12 +93,15 @@ impl Segmenter {
             )));
         }
         let (comps, ncomp) = solid_components(&grid);
+        let solid = Solid::new(grid);
+        let fitter = Fitter::new(mesh, &solid, params.bounding);
         Ok(Self {
             mesh: mesh.clone(),
             params: params.clone(),
-            solid: Solid::new(grid),
+            solid,
             comps,
             ncomp,
+            fitter,
             phase: Phase::Start,
             state: None,
             tries: Vec::new(),
@@ -129,39 +136,23 @@ impl Segmenter {
         self.phase == Phase::Done
     }
 
-    fn fast_shape(&self) -> Shape {
-        match self.params.bounding {
-            BoundingKind::Obb => Shape::Obb,
-            _ => Shape::Ellipsoid,
-        }
+    /// Fit (or fetch from the cache) every part's output volume, and measure.
+    fn evaluate(&mut self, part: Partition) -> State {
+        let fits = self
+            .fitter
+            .fit_all(&self.mesh, &self.solid, &part.labels, &part.parts);
+        self.state_with(part, fits)
     }
 
-    fn evaluate(&self, part: Partition) -> State {
-        let members = part.members();
-        let shape = self.fast_shape();
-        let g = &self.solid.grid;
-        let volumes: Vec<BoundingVolume> = part
-            .parts
-            .iter()
-            .zip(&members)
-            .map(|(m, mem)| {
-                fast_volume(
-                    &self.solid,
-                    m,
-                    shape,
-                    mem.iter().map(|&s| g.points[s as usize]),
-                )
-            })
-            .collect();
-        self.state_with(part, volumes)
-    }
-
-    fn state_with(&self, part: Partition, volumes: Vec<BoundingVolume>) -> State {
+    fn state_with(&self, part: Partition, fits: Vec<Arc<Fit>>) -> State {
         let counts: Vec<f64> = part.parts.iter().map(|m| m.n).collect();
-        let o = outside_volumes(&self.solid.grid, &volumes, &counts);
+        let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume).collect();
+        let cells: Vec<&[[i64; 3]]> = fits.iter().map(|f| f.outside.as_slice()).collect();
+        let o = outside_from_cells(&cells, &counts);
         State {
             f: part.f(),
             part,
+            fits,
             volumes,
             tov: o.tov,
             mov: o.mov,
@@ -335,11 +326,23 @@ impl Segmenter {
     /// One merge; `None` when no merge helps (the phase has moved on).
     fn merge(&mut self) -> Option<Step> {
         let cur = self.state.as_ref()?;
+        let pairs = cur.part.adjacency(&self.solid.grid);
+        // Fit the merged parts missing from the cache: the hull of the union is the hull of
+        // the two hulls.
+        let todo: Vec<(Moments, Vec<DVec3>)> = pairs
+            .iter()
+            .map(|&(a, b)| {
+                let m = cur.part.parts[a as usize].merged(&cur.part.parts[b as usize]);
+                let mut pts = cur.fits[a as usize].hull.clone();
+                pts.extend_from_slice(&cur.fits[b as usize].hull);
+                (m, pts)
+            })
+            .collect();
+        self.fitter.fit_candidates(&self.solid, todo);
+        let cur = self.state.as_ref()?;
         let met = self.meets(cur);
-        let g = &self.solid.grid;
-        let shape = self.fast_shape();
         let mut best: Option<State> = None;
-        for (a, b) in cur.part.adjacency(g) {
+        for (a, b) in pairs {
             let (a, b) = (a as usize, b as usize);
             let mut part = cur.part.clone();
             for l in part.labels.iter_mut() {
@@ -349,19 +352,15 @@ impl Segmenter {
             }
             let mb = part.parts[b];
             part.parts[a] = part.parts[a].merged(&mb);
-            part.parts[b] = Default::default();
-            let pts = part
-                .labels
-                .iter()
-                .enumerate()
-                .filter(|&(_, &l)| l as usize == a)
-                .map(|(s, _)| g.points[s]);
-            let merged = fast_volume(&self.solid, &part.parts[a], shape, pts);
+            part.parts[b] = Moments::default();
+            let mut fits = cur.fits.clone();
+            let Some(merged) = self.fitter.get(&part.parts[a]) else {
+                continue;
+            };
+            fits[a] = merged;
             part.remove_empty_part(b);
-            let mut volumes = cur.volumes.clone();
-            volumes[a] = merged;
-            volumes.remove(b);
-            let cand = self.state_with(part, volumes);
+            fits.remove(b);
+            let cand = self.state_with(part, fits);
             let ok = cand.tov < cur.tov && (!met || self.meets(&cand));
             if ok && best.as_ref().is_none_or(|x| cand.tov < x.tov) {
                 best = Some(cand);
@@ -380,23 +379,6 @@ impl Segmenter {
         }
     }
 
-    fn fit(&self, points: &[DVec3]) -> BoundingVolume {
-        let min_r = 0.5 * self.solid.grid.h;
-        match self.params.bounding {
-            BoundingKind::Ellipsoid => mvee(points, MVEE_TOL, min_r),
-            BoundingKind::Obb => min_obb(points, min_r),
-            BoundingKind::Mixed => {
-                let e = mvee(points, MVEE_TOL, min_r);
-                let b = min_obb(points, min_r);
-                if b.volume() < e.volume() {
-                    b
-                } else {
-                    e
-                }
-            }
-        }
-    }
-
     fn finalize(&mut self) -> Step {
         let Some(cur) = self.state.take() else {
             self.phase = Phase::Done;
@@ -408,81 +390,56 @@ impl Segmenter {
                 mov: f64::NAN,
             };
         };
-        let part = cur.part;
-        let k = part.k();
-        let labels = &part.labels;
-        let triangle_parts = assign_triangles(&self.mesh, &self.solid, labels);
-        let points = part_points(&self.mesh, &self.solid, labels, k, &triangle_parts);
-        let hulls: Vec<Vec<DVec3>> = {
-            #[cfg(feature = "parallel")]
-            {
-                use rayon::prelude::*;
-                points.par_iter().map(|p| hull_points(p)).collect()
-            }
-            #[cfg(not(feature = "parallel"))]
-            {
-                points.iter().map(|p| hull_points(p)).collect()
-            }
+        let cur = if self.params.polish {
+            let mut part = cur.part;
+            tighten(
+                &self.mesh,
+                &self.solid,
+                &self.comps,
+                &mut self.fitter,
+                &mut part,
+                TIGHTEN_PASSES,
+                self.params.mov,
+            );
+            self.evaluate(part)
+        } else {
+            cur
         };
-        let volumes: Vec<BoundingVolume> = {
-            #[cfg(feature = "parallel")]
-            {
-                use rayon::prelude::*;
-                hulls.par_iter().map(|h| self.fit(h)).collect()
-            }
-            #[cfg(not(feature = "parallel"))]
-            {
-                hulls.iter().map(|h| self.fit(h)).collect()
-            }
-        };
-        let counts: Vec<f64> = part.parts.iter().map(|m| m.n).collect();
-        let o = outside_volumes(&self.solid.grid, &volumes, &counts);
+        let k = cur.part.k();
         let n = self.solid.len() as f64;
         let parts: Vec<Part> = (0..k)
             .map(|i| Part {
-                volume: volumes[i],
-                fraction: counts[i] / n,
-                samples: counts[i] as usize,
-                ov: o.ov[i],
-                e: part.e(i),
+                volume: cur.volumes[i],
+                fraction: cur.part.parts[i].n / n,
+                samples: cur.part.parts[i].n as usize,
+                ov: cur.ov[i],
+                e: cur.part.e(i),
             })
             .collect();
-        let adjacency = part.adjacency(&self.solid.grid);
-        let hierarchy = hierarchy::build(hulls, &volumes, &adjacency, |p| self.fit(p));
-        let f = part.f();
+        let adjacency = cur.part.adjacency(&self.solid.grid);
+        let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
+        let hierarchy = hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
+            self.fitter.fit_points(&self.solid, p)
+        });
         let metrics = Metrics {
             k,
-            f,
-            tov: o.tov,
-            mov: o.mov,
+            f: cur.f,
+            tov: cur.tov,
+            mov: cur.mov,
             samples: self.solid.len(),
         };
-        let step = Step {
-            kind: StepKind::Final,
-            k,
-            f,
-            tov: o.tov,
-            mov: o.mov,
-        };
-        self.history.push(step);
+        let step = self.record(StepKind::Final, &cur);
         self.result = Some(Segmentation {
             kind: self.params.bounding,
             parts,
             metrics,
             history: self.history.clone(),
             hierarchy,
-            triangle_parts,
-            sample_parts: part.labels.clone(),
+            triangle_parts: self.fitter.enclosure().triangle_parts(&cur.part.labels),
+            sample_parts: cur.part.labels.clone(),
             cell_size: self.solid.grid.h,
         });
-        self.state = Some(State {
-            part,
-            volumes,
-            f,
-            tov: o.tov,
-            mov: o.mov,
-            ov: o.ov,
-        });
+        self.state = Some(cur);
         self.phase = Phase::Done;
         step
     }
