@@ -40,8 +40,18 @@ fn interior_coverage(mesh: &Mesh, seg: &Segmentation, samples: usize) -> f64 {
 fn two_disjoint_ellipsoids_give_two_tight_parts() {
     let rot = DMat3::from_euler(glam::EulerRot::XYZ, 0.3, 0.5, 0.1);
     let mesh = union(&[
-        ellipsoid(DVec3::new(-3.0, 0.0, 0.0), DVec3::new(1.5, 0.8, 0.5), rot, 48),
-        ellipsoid(DVec3::new(3.0, 1.0, 0.0), DVec3::new(0.7, 1.2, 0.9), DMat3::IDENTITY, 48),
+        ellipsoid(
+            DVec3::new(-3.0, 0.0, 0.0),
+            DVec3::new(1.5, 0.8, 0.5),
+            rot,
+            48,
+        ),
+        ellipsoid(
+            DVec3::new(3.0, 1.0, 0.0),
+            DVec3::new(0.7, 1.2, 0.9),
+            DMat3::IDENTITY,
+            48,
+        ),
     ]);
     let seg = segment(&mesh, &Params::default()).unwrap();
     assert_eq!(seg.metrics.k, 2);
@@ -53,9 +63,24 @@ fn two_disjoint_ellipsoids_give_two_tight_parts() {
 #[test]
 fn dumbbell_splits_at_its_neck() {
     let mesh = union(&[
-        ellipsoid(DVec3::new(-2.0, 0.0, 0.0), DVec3::splat(1.0), DMat3::IDENTITY, 48),
-        ellipsoid(DVec3::new(2.0, 0.0, 0.0), DVec3::splat(1.0), DMat3::IDENTITY, 48),
-        capsule(DVec3::new(-2.0, 0.0, 0.0), DVec3::new(2.0, 0.0, 0.0), 0.3, 32),
+        ellipsoid(
+            DVec3::new(-2.0, 0.0, 0.0),
+            DVec3::splat(1.0),
+            DMat3::IDENTITY,
+            48,
+        ),
+        ellipsoid(
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::splat(1.0),
+            DMat3::IDENTITY,
+            48,
+        ),
+        capsule(
+            DVec3::new(-2.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            0.3,
+            32,
+        ),
     ]);
     let params = Params {
         k: Some(2),
@@ -84,7 +109,11 @@ fn dumbbell_splits_at_its_neck() {
 #[test]
 fn parts_are_connected_cover_every_sample_and_enclose_the_mesh() {
     let mesh = bundled("bunny.obj");
-    for bounding in [BoundingKind::Ellipsoid, BoundingKind::Obb, BoundingKind::Mixed] {
+    for bounding in [
+        BoundingKind::Ellipsoid,
+        BoundingKind::Obb,
+        BoundingKind::Mixed,
+    ] {
         let params = Params {
             k: Some(12),
             samples: 8_000,
@@ -115,7 +144,13 @@ fn auto_mode_meets_tolerances_on_the_bundled_meshes() {
         let mesh = bundled(name);
         let seg = segment(&mesh, &Params::default()).unwrap();
         let m = seg.metrics;
-        assert!(m.tov < 0.3 && m.mov < 0.5, "{name}: k {} TOV {} MOV {}", m.k, m.tov, m.mov);
+        assert!(
+            m.tov < 0.3 && m.mov < 0.5,
+            "{name}: k {} TOV {} MOV {}",
+            m.k,
+            m.tov,
+            m.mov
+        );
     }
 }
 

@@ -288,3 +288,54 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
     }
     moves
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flooding::{is_connected, solid_components};
+    use crate::initialization::cvt;
+    use crate::sampling::Grid;
+    use glam::DVec3;
+
+    /// An L-shaped solid made of two boxes: its best 2-partition is the two boxes.
+    fn l_shape() -> Grid {
+        Grid::from_inside_fn(DVec3::ZERO, DVec3::new(3.0, 3.0, 1.0), 0.1, |p| {
+            let in_a = p.x <= 3.0 && p.y <= 1.0;
+            let in_b = p.x <= 1.0 && p.y <= 3.0;
+            p.x >= 0.0 && p.y >= 0.0 && p.z >= 0.0 && p.z <= 1.0 && (in_a || in_b)
+        })
+    }
+
+    #[test]
+    fn optimisation_never_raises_f_and_keeps_parts_connected() {
+        let solid = Solid::new(l_shape());
+        let (comps, _) = solid_components(&solid.grid);
+        for seed in 0..4 {
+            let mut part = cvt(&solid, &comps, 1, 5, seed);
+            let stats = optimize(&solid, &comps, &mut part, None, None, 100);
+            assert!(stats.f_after <= stats.f_before, "{stats:?}");
+            assert!(stats.f_after >= 1.0);
+            assert_eq!(part.k(), 5);
+            assert!(is_connected(&solid.grid, &part.labels, &comps));
+            // Moments stay exactly those of the labels.
+            let fresh = Partition::from_labels(&solid, part.labels.clone(), 5);
+            assert_eq!(fresh, part);
+        }
+    }
+
+    #[test]
+    fn two_parts_of_an_l_are_its_two_arms() {
+        let solid = Solid::new(l_shape());
+        let (comps, _) = solid_components(&solid.grid);
+        let mut part = cvt(&solid, &comps, 1, 2, 1);
+        optimize(&solid, &comps, &mut part, None, None, 100);
+        // Box-like parts: F close to a box's e (1.127), far below the single-part F.
+        let one = Partition::from_labels(&solid, vec![0; solid.len()], 1);
+        assert!(
+            part.f() < 1.16 && one.f() > 1.25,
+            "{} vs {}",
+            part.f(),
+            one.f()
+        );
+    }
+}
