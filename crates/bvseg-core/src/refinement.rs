@@ -28,7 +28,7 @@ use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::partition::{Partition, Solid};
 use crate::sampling::Grid;
-use crate::tightening::tighten;
+use crate::tightening::{tighten, Coverage};
 use crate::{
     hierarchy, BoundingVolume, Error, Mesh, Metrics, Params, Part, Segmentation, Step, StepKind,
 };
@@ -341,9 +341,38 @@ impl Segmenter {
         self.fitter.fit_candidates(&self.solid, todo);
         let cur = self.state.as_ref()?;
         let met = self.meets(cur);
-        let mut best: Option<State> = None;
+        let total = self.solid.len() as f64;
+        // Judge each merge by its change of the union's outside cells, incrementally.
+        let mut cov = Coverage::new(&self.solid);
+        for f in &cur.fits {
+            cov.add(&f.outside);
+        }
+        let mut best: Option<(f64, f64, usize, usize)> = None;
         for (a, b) in pairs {
             let (a, b) = (a as usize, b as usize);
+            let m = cur.part.parts[a].merged(&cur.part.parts[b]);
+            let Some(fit) = self.fitter.get(&m) else {
+                continue;
+            };
+            cov.remove(&cur.fits[a].outside);
+            cov.remove(&cur.fits[b].outside);
+            cov.add(&fit.outside);
+            let tov = cov.union as f64 / total;
+            cov.remove(&fit.outside);
+            cov.add(&cur.fits[a].outside);
+            cov.add(&cur.fits[b].outside);
+            let ov = fit.outside.len() as f64 / m.n;
+            let mov = (0..cur.ov.len())
+                .filter(|&i| i != a && i != b)
+                .map(|i| cur.ov[i])
+                .fold(ov, f64::max);
+            let ok = tov < cur.tov
+                && (!met || (tov < self.params.tov && mov < self.params.mov));
+            if ok && best.is_none_or(|x| tov < x.0) {
+                best = Some((tov, mov, a, b));
+            }
+        }
+        let best = best.map(|(_, _, a, b)| {
             let mut part = cur.part.clone();
             for l in part.labels.iter_mut() {
                 if *l as usize == b {
@@ -353,19 +382,10 @@ impl Segmenter {
             let mb = part.parts[b];
             part.parts[a] = part.parts[a].merged(&mb);
             part.parts[b] = Moments::default();
-            let mut fits = cur.fits.clone();
-            let Some(merged) = self.fitter.get(&part.parts[a]) else {
-                continue;
-            };
-            fits[a] = merged;
             part.remove_empty_part(b);
-            fits.remove(b);
-            let cand = self.state_with(part, fits);
-            let ok = cand.tov < cur.tov && (!met || self.meets(&cand));
-            if ok && best.as_ref().is_none_or(|x| cand.tov < x.tov) {
-                best = Some(cand);
-            }
-        }
+            part
+        });
+        let best = best.map(|p| self.evaluate(p));
         match best {
             Some(s) => {
                 let step = self.record(StepKind::Merge, &s);
