@@ -134,6 +134,8 @@ impl Enclosure {
     ) -> Vec<DVec3> {
         let g = &solid.grid;
         let mut pts = Vec::new();
+        // Triangles share corners: bound each distinct vertex once (the hull is the cost).
+        let mut verts: Vec<u32> = Vec::new();
         for &s in members {
             let s = s as usize;
             let p = g.points[s];
@@ -150,9 +152,12 @@ impl Enclosure {
                 pts.push(p);
             }
             for &t in self.triangles_of(s) {
-                pts.extend(mesh.corners(t as usize));
+                verts.extend_from_slice(&mesh.triangles()[t as usize]);
             }
         }
+        verts.sort_unstable();
+        verts.dedup();
+        pts.extend(verts.iter().map(|&v| mesh.vertices()[v as usize]));
         pts
     }
 }
