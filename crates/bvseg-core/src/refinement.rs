@@ -366,8 +366,7 @@ impl Segmenter {
                 .filter(|&i| i != a && i != b)
                 .map(|i| cur.ov[i])
                 .fold(ov, f64::max);
-            let ok = tov < cur.tov
-                && (!met || (tov < self.params.tov && mov < self.params.mov));
+            let ok = tov < cur.tov && (!met || (tov < self.params.tov && mov < self.params.mov));
             if ok && best.is_none_or(|x| tov < x.0) {
                 best = Some((tov, mov, a, b));
             }
