@@ -133,23 +133,30 @@ impl Enclosure {
         label: u32,
     ) -> Vec<DVec3> {
         let g = &solid.grid;
-        let mut pts = Vec::new();
+        // Lattice points (samples and shared-face centres) in doubled lattice coordinates, so
+        // that face centres are integers too.
+        let mut lat: Vec<[i64; 3]> = Vec::new();
         // Triangles share corners: bound each distinct vertex once (the hull is the cost).
         let mut verts: Vec<u32> = Vec::new();
         for &s in members {
             let s = s as usize;
-            let p = g.points[s];
+            let c = g.coords[s].map(|x| 2 * x as i64);
             let mut interior = true;
             for &t in &g.neighbors[s] {
                 if t == NONE {
                     interior = false;
                 } else if label_of(t as usize) != label {
                     interior = false;
-                    pts.push(0.5 * (p + g.points[t as usize]));
+                    let d = g.coords[t as usize];
+                    lat.push([
+                        (c[0] + 2 * d[0] as i64) / 2,
+                        (c[1] + 2 * d[1] as i64) / 2,
+                        (c[2] + 2 * d[2] as i64) / 2,
+                    ]);
                 }
             }
             if !interior {
-                pts.push(p);
+                lat.push(c);
             }
             for &t in self.triangles_of(s) {
                 verts.extend_from_slice(&mesh.triangles()[t as usize]);
@@ -157,9 +164,44 @@ impl Enclosure {
         }
         verts.sort_unstable();
         verts.dedup();
+        let mut pts: Vec<DVec3> = extreme_on_every_line(&lat)
+            .into_iter()
+            .map(|c| g.origin + 0.5 * g.h * DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
+            .collect();
         pts.extend(verts.iter().map(|&v| mesh.vertices()[v as usize]));
         pts
     }
+}
+
+/// The lattice points that are the first or last of the set on each of the three axis lines
+/// through them. Any other point lies strictly between two points of the set, so it cannot be
+/// a vertex of their convex hull: this is a cheap, exact prefilter for the hull.
+fn extreme_on_every_line(lat: &[[i64; 3]]) -> Vec<[i64; 3]> {
+    let mut keep = vec![true; lat.len()];
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut ends: std::collections::HashMap<(i64, i64), (i64, i64)> =
+            std::collections::HashMap::with_capacity(lat.len());
+        for p in lat {
+            let e = ends.entry((p[u], p[v])).or_insert((p[axis], p[axis]));
+            e.0 = e.0.min(p[axis]);
+            e.1 = e.1.max(p[axis]);
+        }
+        for (i, p) in lat.iter().enumerate() {
+            let (lo, hi) = ends[&(p[u], p[v])];
+            if p[axis] != lo && p[axis] != hi {
+                keep[i] = false;
+            }
+        }
+    }
+    let mut out: Vec<[i64; 3]> = lat
+        .iter()
+        .zip(keep)
+        .filter_map(|(p, k)| k.then_some(*p))
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// For each triangle, the sample nearest its centroid (among the grid-nearest samples of the

@@ -34,7 +34,7 @@ use crate::{
 };
 
 /// Passes of the outside-volume tightening (see [`crate::tightening`]).
-pub const TIGHTEN_PASSES: usize = 30;
+pub const TIGHTEN_PASSES: usize = 12;
 
 /// How many parts a refinement step tries to split before keeping the first split anyway.
 pub const SPLIT_TRIES: usize = 4;
@@ -419,6 +419,7 @@ impl Segmenter {
                 &mut part,
                 TIGHTEN_PASSES,
                 self.params.mov,
+                None,
             );
             self.evaluate(part)
         } else {
