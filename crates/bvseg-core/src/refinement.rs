@@ -76,6 +76,7 @@ pub struct Segmenter {
     /// Parts left to try in the current split step, and the first try's result.
     tries: Vec<usize>,
     first_try: Option<State>,
+    refine_steps: usize,
     history: Vec<Step>,
     result: Option<Segmentation>,
 }
@@ -106,6 +107,7 @@ impl Segmenter {
             state: None,
             tries: Vec::new(),
             first_try: None,
+            refine_steps: 0,
             history: Vec::new(),
             result: None,
         })
@@ -236,6 +238,18 @@ impl Segmenter {
             return None;
         }
         if self.tries.is_empty() && self.first_try.is_none() {
+            self.refine_steps += 1;
+            if self.refine_steps > 4 * self.params.max_k {
+                // A guard against splits and merges undoing each other forever.
+                self.phase = Phase::Final;
+                return None;
+            }
+            if cur.tov < self.params.tov {
+                if let Some(step) = self.merge_worst() {
+                    return Some(step);
+                }
+            }
+            let cur = self.state.as_ref()?;
             // While TOV is too large, the part that adds the most outside volume is the one to
             // split (the paper's largest OV favours small parts, whose split barely moves TOV);
             // once only MOV is too large, the largest OV, as in the paper.
@@ -323,12 +337,32 @@ impl Segmenter {
         }
     }
 
-    /// One merge; `None` when no merge helps (the phase has moved on).
-    fn merge(&mut self) -> Option<Step> {
-        let cur = self.state.as_ref()?;
-        let pairs = cur.part.adjacency(&self.solid.grid);
-        // Fit the merged parts missing from the cache: the hull of the union is the hull of
-        // the two hulls.
+    /// Pairs of parts that may merge: those that touch, and those whose volumes' boxes
+    /// overlap (separate pieces of the solid, such as a teddy's eyes, touch nothing).
+    fn merge_pairs(&self, s: &State) -> Vec<(u32, u32)> {
+        let mut pairs = s.part.adjacency(&self.solid.grid);
+        let boxes: Vec<(DVec3, DVec3)> = s.volumes.iter().map(|v| v.aabb()).collect();
+        for a in 0..boxes.len() {
+            for b in a + 1..boxes.len() {
+                let (la, ha) = boxes[a];
+                let (lb, hb) = boxes[b];
+                if la.cmple(hb).all() && lb.cmple(ha).all() {
+                    pairs.push((a as u32, b as u32));
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        pairs
+    }
+
+    /// TOV and MOV after merging each pair, judged incrementally on the coverage of the
+    /// union's outside cells: `(tov, mov, a, b)`.
+    fn merge_options(&mut self, pairs: &[(u32, u32)]) -> Vec<(f64, f64, usize, usize)> {
+        let Some(cur) = self.state.as_ref() else {
+            return Vec::new();
+        };
+        // The hull of the union is the hull of the two hulls.
         let todo: Vec<(Moments, Vec<DVec3>)> = pairs
             .iter()
             .map(|&(a, b)| {
@@ -339,16 +373,16 @@ impl Segmenter {
             })
             .collect();
         self.fitter.fit_candidates(&self.solid, todo);
-        let cur = self.state.as_ref()?;
-        let met = self.meets(cur);
+        let Some(cur) = self.state.as_ref() else {
+            return Vec::new();
+        };
         let total = self.solid.len() as f64;
-        // Judge each merge by its change of the union's outside cells, incrementally.
         let mut cov = Coverage::new(&self.solid);
         for f in &cur.fits {
             cov.add(&f.outside);
         }
-        let mut best: Option<(f64, f64, usize, usize)> = None;
-        for (a, b) in pairs {
+        let mut out = Vec::new();
+        for &(a, b) in pairs {
             let (a, b) = (a as usize, b as usize);
             let m = cur.part.parts[a].merged(&cur.part.parts[b]);
             let Some(fit) = self.fitter.get(&m) else {
@@ -366,26 +400,40 @@ impl Segmenter {
                 .filter(|&i| i != a && i != b)
                 .map(|i| cur.ov[i])
                 .fold(ov, f64::max);
-            let ok = tov < cur.tov && (!met || (tov < self.params.tov && mov < self.params.mov));
-            if ok && best.is_none_or(|x| tov < x.0) {
-                best = Some((tov, mov, a, b));
+            out.push((tov, mov, a, b));
+        }
+        out
+    }
+
+    /// The current partition with parts `a` and `b` merged, measured.
+    fn merged_state(&mut self, a: usize, b: usize) -> Option<State> {
+        let cur = self.state.as_ref()?;
+        let mut part = cur.part.clone();
+        for l in part.labels.iter_mut() {
+            if *l as usize == b {
+                *l = a as u32;
             }
         }
-        let best = best.map(|(_, _, a, b)| {
-            let mut part = cur.part.clone();
-            for l in part.labels.iter_mut() {
-                if *l as usize == b {
-                    *l = a as u32;
-                }
-            }
-            let mb = part.parts[b];
-            part.parts[a] = part.parts[a].merged(&mb);
-            part.parts[b] = Moments::default();
-            part.remove_empty_part(b);
-            part
-        });
-        let best = best.map(|p| self.evaluate(p));
-        match best {
+        let mb = part.parts[b];
+        part.parts[a] = part.parts[a].merged(&mb);
+        part.parts[b] = Moments::default();
+        part.remove_empty_part(b);
+        Some(self.evaluate(part))
+    }
+
+    /// One merge; `None` when no merge helps (the phase has moved on).
+    fn merge(&mut self) -> Option<Step> {
+        let cur = self.state.as_ref()?;
+        let met = self.meets(cur);
+        let cur_tov = cur.tov;
+        let pairs = self.merge_pairs(cur);
+        let (tol_t, tol_m) = (self.params.tov, self.params.mov);
+        let best = self
+            .merge_options(&pairs)
+            .into_iter()
+            .filter(|&(tov, mov, _, _)| tov < cur_tov && (!met || (tov < tol_t && mov < tol_m)))
+            .min_by(|x, y| x.0.total_cmp(&y.0).then((x.2, x.3).cmp(&(y.2, y.3))));
+        match best.and_then(|(_, _, a, b)| self.merged_state(a, b)) {
             Some(s) => {
                 let step = self.record(StepKind::Merge, &s);
                 self.state = Some(s);
@@ -396,6 +444,30 @@ impl Segmenter {
                 None
             }
         }
+    }
+
+    /// When only MOV is out of tolerance, merging the worst part into a neighbour often
+    /// fixes it where splitting cannot (a small part's outside volume is large relative to
+    /// its own volume). Returns the merge step if one lowers MOV and keeps TOV in tolerance.
+    fn merge_worst(&mut self) -> Option<Step> {
+        let cur = self.state.as_ref()?;
+        let worst = (0..cur.ov.len()).max_by(|&a, &b| cur.ov[a].total_cmp(&cur.ov[b]))? as u32;
+        let cur_mov = cur.mov;
+        let pairs: Vec<(u32, u32)> = self
+            .merge_pairs(cur)
+            .into_iter()
+            .filter(|&(a, b)| a == worst || b == worst)
+            .collect();
+        let tol_t = self.params.tov;
+        let best = self
+            .merge_options(&pairs)
+            .into_iter()
+            .filter(|&(tov, mov, _, _)| tov < tol_t && mov < cur_mov)
+            .min_by(|x, y| x.1.total_cmp(&y.1).then((x.2, x.3).cmp(&(y.2, y.3))))?;
+        let s = self.merged_state(best.2, best.3)?;
+        let step = self.record(StepKind::Merge, &s);
+        self.state = Some(s);
+        Some(step)
     }
 
     fn finalize(&mut self) -> Step {
