@@ -1034,6 +1034,21 @@ mod tests {
     }
 
     #[test]
+    fn round_off_below_tolerance_is_flat() {
+        // A square lattice whose points are off its plane by round-off only.
+        let mut rng = Rng::new(5);
+        let pts: Vec<DVec3> = (0..100)
+            .map(|i| {
+                let z = 1e-14 * (rng.next_f64() - 0.5);
+                DVec3::new((i % 10) as f64, (i / 10) as f64, z) + DVec3::splat(100.0)
+            })
+            .collect();
+        let h = convex_hull(&pts);
+        assert_eq!((h.dim, h.vertices.len()), (2, 4));
+        check_hull(&pts, &h);
+    }
+
+    #[test]
     fn deterministic_and_order_independent_vertex_set() {
         let mut rng = Rng::new(11);
         let mut pts: Vec<DVec3> = (0..3000)
