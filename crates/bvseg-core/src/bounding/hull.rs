@@ -662,9 +662,9 @@ impl InnerEllipsoid {
 }
 
 /// For rays from a point `c` strictly inside a polytope: a cube map of directions whose cells
-/// list every face the ray may leave through. A face is listed in a cell when the bounding caps
-/// of the face's and of the cell's central projections on the unit sphere overlap, which is
-/// conservative; the cells of a face are found by a flood fill from the one holding its centre.
+/// list every face the ray may leave through. A face is listed in a cell when its central
+/// projection on the unit sphere meets the cell's bounding cap, which is conservative; the
+/// cells of a face are found by a flood fill from the one holding its centre.
 struct DirMap {
     g: usize,
     start: Vec<u32>,
