@@ -1,1 +1,132 @@
-//! (stage to be written)
+//! Stage 4a: the Lloyd-like assignment step.
+//!
+//! With each part's mean, covariance and e-tightness frozen, every sample goes to the part
+//! minimising `h_j(x) = e(S_j) * d_M(x, S_j)`, the first-order change of F when `x` joins
+//! `S_j` (paper section 4). Samples are independent, so this runs in parallel; each result
+//! depends only on its own sample, so the output is the same for any thread count.
+use glam::DVec3;
+
+use crate::moments::{inv_packed, quad_packed, Moments};
+use crate::partition::CELL_VAR;
+
+/// Which first-order rule ranks the parts for a sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rule {
+    /// The paper's `e_j d_M(x, S_j)`.
+    Paper,
+    /// The expansion that keeps the covariance rescaling: `e_j (d_M(x, S_j) - 3)`.
+    Corrected,
+    /// Euclidean distance to the part's mean (k-means / CVT).
+    Euclidean,
+}
+
+/// A part's frozen metric during one sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PartMetric {
+    /// Mean (lattice units).
+    pub mu: DVec3,
+    /// Inverse covariance (packed symmetric).
+    pub inv: [f64; 6],
+    /// e-tightness.
+    pub e: f64,
+}
+
+impl PartMetric {
+    /// The metric of a part from its moments (cell covariance included). Empty parts get a
+    /// metric that no sample prefers.
+    pub fn new(m: &Moments) -> Self {
+        if m.n < 1.0 {
+            return Self {
+                mu: DVec3::ZERO,
+                inv: [0.0; 6],
+                e: f64::INFINITY,
+            };
+        }
+        let c = m.cov_packed(CELL_VAR);
+        // The cell term keeps C positive definite; the fallback only guards round-off.
+        let inv = inv_packed(&c).unwrap_or([12.0, 12.0, 12.0, 0.0, 0.0, 0.0]);
+        Self {
+            mu: m.mean(),
+            inv,
+            e: m.e(CELL_VAR, 1.0),
+        }
+    }
+
+    /// Squared Mahalanobis distance of `q` to the part.
+    #[inline]
+    pub fn d(&self, q: DVec3) -> f64 {
+        quad_packed(&self.inv, q - self.mu)
+    }
+
+    /// The cost of `q` joining this part under `rule`.
+    #[inline]
+    pub fn cost(&self, q: DVec3, rule: Rule) -> f64 {
+        match rule {
+            Rule::Paper => self.e * self.d(q),
+            Rule::Corrected => self.e * (self.d(q) - 3.0),
+            Rule::Euclidean => {
+                if self.e.is_finite() {
+                    (q - self.mu).length_squared()
+                } else {
+                    f64::INFINITY
+                }
+            }
+        }
+    }
+}
+
+/// For each sample in `samples`, the candidate part of least cost (ties: the lower index).
+pub fn assign(
+    q: &[DVec3],
+    samples: &[u32],
+    metrics: &[PartMetric],
+    candidates: &[u32],
+    rule: Rule,
+) -> Vec<u32> {
+    let best = |&s: &u32| {
+        let x = q[s as usize];
+        let mut best = candidates[0];
+        let mut best_cost = f64::INFINITY;
+        for &j in candidates {
+            let c = metrics[j as usize].cost(x, rule);
+            if c < best_cost {
+                best_cost = c;
+                best = j;
+            }
+        }
+        best
+    };
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        samples.par_iter().with_min_len(1024).map(best).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        samples.iter().map(best).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mahalanobis_prefers_elongated_part() {
+        // Part 0: long along x; part 1: round, nearer in Euclidean terms.
+        let mut a = Moments::default();
+        for i in -20..=20 {
+            a.add(DVec3::new(i as f64, 0.0, 0.0));
+        }
+        let mut b = Moments::default();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                b.add(DVec3::new(25.0 + dx as f64, 8.0 + dy as f64, 0.0));
+            }
+        }
+        let m = [PartMetric::new(&a), PartMetric::new(&b)];
+        let q = [DVec3::new(21.0, 0.0, 0.0)];
+        assert_eq!(assign(&q, &[0], &m, &[0, 1], Rule::Paper), vec![0]);
+        assert_eq!(assign(&q, &[0], &m, &[0, 1], Rule::Euclidean), vec![1]);
+    }
+}

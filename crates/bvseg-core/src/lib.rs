@@ -25,11 +25,14 @@
 //! [`assignment`] / [`flooding`] -> [`optimization`] -> [`refinement`] -> [`bounding`] /
 //! [`enclosure`] -> [`metrics`] -> [`hierarchy`].
 #![warn(missing_docs)]
+// Index loops over 3x3 matrices and parallel arrays read more clearly than iterator chains.
+#![allow(clippy::needless_range_loop)]
 
 pub mod assignment;
 pub mod bounding;
 pub mod enclosure;
 mod error;
+pub mod fitting;
 pub mod flooding;
 pub mod hierarchy;
 pub mod initialization;
@@ -44,6 +47,8 @@ pub mod refinement;
 mod result;
 pub mod rng;
 pub mod sampling;
+pub mod shapes;
+pub mod tightening;
 mod volume;
 
 pub use error::Error;

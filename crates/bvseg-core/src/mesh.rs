@@ -31,10 +31,17 @@ impl Mesh {
         let count = vertices.len();
         for (index, t) in triangles.iter().enumerate() {
             if let Some(&vertex) = t.iter().find(|&&v| v as usize >= count) {
-                return Err(Error::BadIndex { index, vertex, count });
+                return Err(Error::BadIndex {
+                    index,
+                    vertex,
+                    count,
+                });
             }
         }
-        Ok(Self { vertices, triangles })
+        Ok(Self {
+            vertices,
+            triangles,
+        })
     }
 
     /// Like [`Mesh::new`] from single-precision positions, as most engines store them.

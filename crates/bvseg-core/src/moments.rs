@@ -133,7 +133,7 @@ pub fn inv_packed(c: &[f64; 6]) -> Option<[f64; 6]> {
     let a01 = xz * yz - xy * zz;
     let a02 = xy * yz - xz * yy;
     let det = xx * a00 + xy * a01 + xz * a02;
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return None;
     }
     let inv = 1.0 / det;
@@ -184,6 +184,29 @@ mod tests {
         let el = Grid::from_inside_fn(-r, r, h, |p| (p / r).length_squared() <= 1.0);
         let e = moments_of(&el).e(h * h / 12.0, h * h * h);
         assert!((e - 1.0).abs() < 0.02, "ellipsoid e = {e}");
+    }
+
+    #[test]
+    fn e_is_affine_invariant() {
+        // The same solid (a half-ball) under a shear-and-stretch map, sampled afresh: e agrees
+        // within sampling error, while the volumes differ by det(A).
+        let a = DMat3::from_cols(
+            DVec3::new(2.0, 0.3, 0.0),
+            DVec3::new(0.0, 0.7, 0.4),
+            DVec3::new(0.5, 0.0, 1.3),
+        );
+        let ai = a.inverse();
+        let inside = |p: DVec3| p.length() <= 1.0 && p.z >= -0.2;
+        let h = 0.03;
+        let g1 = Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), h, inside);
+        let lo = DVec3::splat(-4.0);
+        let g2 = Grid::from_inside_fn(lo, -lo, h, |p| inside(ai * p));
+        let e1 = moments_of(&g1).e(h * h / 12.0, h * h * h);
+        let e2 = moments_of(&g2).e(h * h / 12.0, h * h * h);
+        assert!((e1 - e2).abs() < 0.01, "{e1} vs {e2}");
+        assert!(e1 > 1.05, "a half-ball is not an ellipsoid: {e1}");
+        let ratio = g2.len() as f64 / g1.len() as f64;
+        assert!((ratio - a.determinant()).abs() / a.determinant() < 0.02);
     }
 
     #[test]

@@ -93,12 +93,14 @@ impl Params {
                 ));
             }
         }
-        if !(self.tov.is_finite() && self.tov >= 0.0) || !(self.mov.is_finite() && self.mov >= 0.0)
-        {
+        if !(self.tov.is_finite() && self.tov >= 0.0 && self.mov.is_finite() && self.mov >= 0.0) {
             return bad("tolerances must be finite and non-negative".into());
         }
         if self.max_k == 0 || self.max_k > 4096 {
-            return bad(format!("max_k must be between 1 and 4096, got {}", self.max_k));
+            return bad(format!(
+                "max_k must be between 1 and 4096, got {}",
+                self.max_k
+            ));
         }
         if self.max_sweeps == 0 {
             return bad("max_sweeps must be at least 1".into());

@@ -1,1 +1,174 @@
-//! (stage to be written)
+//! The state every stage works on: the sampled solid and a labelling of its samples.
+//!
+//! Positions are kept in lattice units, relative to the grid's centre cell: every sample
+//! coordinate is an integer, so the moment sums below are exact in f64 (for any grid that
+//! fits in memory) and therefore independent of summation order. That is what makes the
+//! result bit-identical whatever the thread count. F and e are affine invariant, so nothing
+//! is lost by working in these units.
+use glam::DVec3;
+
+use crate::moments::Moments;
+use crate::sampling::Grid;
+
+/// Covariance of a unit cube cell (lattice units): `h^2 / 12` with `h = 1`.
+pub const CELL_VAR: f64 = 1.0 / 12.0;
+
+/// The sampled solid in lattice units.
+#[derive(Debug, Clone)]
+pub struct Solid {
+    /// The sampling grid.
+    pub grid: Grid,
+    /// Sample positions in lattice units relative to `offset`.
+    pub q: Vec<DVec3>,
+    /// Lattice coordinate that `q = 0` stands for.
+    pub offset: [i64; 3],
+}
+
+impl Solid {
+    /// Wrap a grid.
+    pub fn new(grid: Grid) -> Self {
+        let offset = [
+            (grid.dims[0] / 2) as i64,
+            (grid.dims[1] / 2) as i64,
+            (grid.dims[2] / 2) as i64,
+        ];
+        let q = grid
+            .coords
+            .iter()
+            .map(|c| {
+                DVec3::new(
+                    (c[0] as i64 - offset[0]) as f64,
+                    (c[1] as i64 - offset[1]) as f64,
+                    (c[2] as i64 - offset[2]) as f64,
+                )
+            })
+            .collect();
+        Self { grid, q, offset }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.q.len()
+    }
+
+    /// Whether there is no sample.
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty()
+    }
+
+    /// World position of a point given in lattice units.
+    #[inline]
+    pub fn to_world(&self, q: DVec3) -> DVec3 {
+        self.grid.origin
+            + self.grid.h
+                * (q + DVec3::new(
+                    self.offset[0] as f64,
+                    self.offset[1] as f64,
+                    self.offset[2] as f64,
+                ))
+    }
+
+    /// Lattice-unit position of a world point.
+    #[inline]
+    pub fn to_lattice(&self, p: DVec3) -> DVec3 {
+        (p - self.grid.origin) / self.grid.h
+            - DVec3::new(
+                self.offset[0] as f64,
+                self.offset[1] as f64,
+                self.offset[2] as f64,
+            )
+    }
+}
+
+/// A partition of the samples into `k` labelled parts, with each part's moments.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Partition {
+    /// Part of each sample.
+    pub labels: Vec<u32>,
+    /// Moments of each part.
+    pub parts: Vec<Moments>,
+}
+
+impl Partition {
+    /// Build from labels (each in `0..k`).
+    pub fn from_labels(solid: &Solid, labels: Vec<u32>, k: usize) -> Self {
+        let mut parts = vec![Moments::default(); k];
+        for (s, &l) in labels.iter().enumerate() {
+            parts[l as usize].add(solid.q[s]);
+        }
+        Self { labels, parts }
+    }
+
+    /// Number of parts.
+    pub fn k(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// F(P) = sum_i vol(S_i)/vol(S) e(S_i).
+    pub fn f(&self) -> f64 {
+        let n: f64 = self.parts.iter().map(|m| m.n).sum();
+        self.parts
+            .iter()
+            .map(|m| m.f_term(CELL_VAR, 1.0))
+            .sum::<f64>()
+            / n
+    }
+
+    /// e-tightness of part `i`.
+    pub fn e(&self, i: usize) -> f64 {
+        self.parts[i].e(CELL_VAR, 1.0)
+    }
+
+    /// Move sample `s` (at `q`) to part `to`.
+    #[inline]
+    pub fn move_sample(&mut self, s: usize, q: DVec3, to: u32) {
+        let from = self.labels[s];
+        self.parts[from as usize].remove(q);
+        self.parts[to as usize].add(q);
+        self.labels[s] = to;
+    }
+
+    /// Whether some part has no sample.
+    pub fn has_empty_part(&self) -> bool {
+        self.parts.iter().any(|m| m.n < 1.0)
+    }
+
+    /// The samples of each part.
+    pub fn members(&self) -> Vec<Vec<u32>> {
+        let mut m = vec![Vec::new(); self.k()];
+        for (s, &l) in self.labels.iter().enumerate() {
+            m[l as usize].push(s as u32);
+        }
+        m
+    }
+
+    /// Pairs of parts that touch (share a grid face), sorted, each once as `(a, b)`, `a < b`.
+    pub fn adjacency(&self, grid: &Grid) -> Vec<(u32, u32)> {
+        let mut pairs = Vec::new();
+        for (s, nb) in grid.neighbors.iter().enumerate() {
+            let a = self.labels[s];
+            // Looking only at +x, +y, +z neighbours sees each face once.
+            for &t in [nb[1], nb[3], nb[5]].iter() {
+                if t != crate::sampling::NONE {
+                    let b = self.labels[t as usize];
+                    if a != b {
+                        pairs.push((a.min(b), a.max(b)));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        pairs
+    }
+
+    /// Remove part `i` after its samples have been relabelled; labels above `i` shift down.
+    pub fn remove_empty_part(&mut self, i: usize) {
+        self.parts.remove(i);
+        for l in &mut self.labels {
+            if *l as usize > i {
+                *l -= 1;
+            }
+        }
+    }
+}

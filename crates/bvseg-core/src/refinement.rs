@@ -1,39 +1,487 @@
-//! Stage 9: the refinement loop (placeholder until the pipeline lands).
+//! Stage 9: the complete algorithm of the paper's section 5, as a steppable state machine.
+//!
+//! 1. Start: a CVT with one part per connected piece of the solid (or `k` parts in fixed-k
+//!    mode), optimised.
+//! 2. Refine (tolerance mode): while TOV >= sigma_G or MOV >= sigma_L and k < max_k, split
+//!    the part with the largest OV and re-optimise it with its neighbours; if TOV got worse,
+//!    undo and try the part with the next largest OV (up to [`SPLIT_TRIES`] parts), and if
+//!    every try fails keep the first.
+//! 3. Merge: merge the touching pair whose merge lowers TOV most, while one does and the
+//!    tolerances stay met.
+//! 4. Final: fit the output volumes (minimum-volume ellipsoids, boxes or the smaller of the
+//!    two) to each part's enclosure points, measure, and build the hierarchy.
+//!
+//! Beyond the paper, which judges steps 2-3 with scaled Legendre ellipsoids, every step is
+//! judged with the output volumes themselves, fitted to the points the output must enclose
+//! (see [`crate::enclosure`]): the tolerances then hold for what the user gets, not for a
+//! proxy. A part's fit depends only on its set of samples, so fits are cached by the part's
+//! exact moments and only the parts a step changed are refitted.
+use glam::DVec3;
+
+use std::sync::Arc;
+
+use crate::fitting::{Fit, Fitter};
+use crate::flooding::solid_components;
+use crate::initialization::{cvt, split};
+use crate::metrics::outside_from_cells;
+use crate::moments::Moments;
+use crate::optimization::optimize;
+use crate::partition::{Partition, Solid};
+use crate::sampling::Grid;
+use crate::tightening::{tighten, Coverage};
 use crate::{
-    BoundingKind, Error, Mesh, Metrics, Params, Part, Segmentation, Step,
+    hierarchy, BoundingVolume, Error, Mesh, Metrics, Params, Part, Segmentation, Step, StepKind,
 };
 
-/// Steppable segmentation.
+/// Passes of the outside-volume tightening (see [`crate::tightening`]).
+pub const TIGHTEN_PASSES: usize = 30;
+
+/// How many parts a refinement step tries to split before keeping the first split anyway.
+pub const SPLIT_TRIES: usize = 4;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Start,
+    Refine,
+    Merge,
+    Final,
+    Done,
+}
+
+/// A partition with its volumes and figures.
+#[derive(Debug, Clone)]
+struct State {
+    part: Partition,
+    fits: Vec<Arc<Fit>>,
+    volumes: Vec<BoundingVolume>,
+    f: f64,
+    tov: f64,
+    mov: f64,
+    ov: Vec<f64>,
+}
+
+/// The segmentation as a sequence of steps, for progress display and interactive use: call
+/// [`Segmenter::step`] until it returns `None`, then [`Segmenter::finish`]. Each step is a
+/// bounded amount of work (one split or merge with its re-optimisation), so a UI can run one
+/// per frame.
 pub struct Segmenter {
+    mesh: Mesh,
     params: Params,
-    tri: usize,
+    solid: Solid,
+    comps: Vec<u32>,
+    ncomp: usize,
+    fitter: Fitter,
+    phase: Phase,
+    state: Option<State>,
+    /// Parts left to try in the current split step, and the first try's result.
+    tries: Vec<usize>,
+    first_try: Option<State>,
+    history: Vec<Step>,
+    result: Option<Segmentation>,
 }
 
 impl Segmenter {
-    /// Start a segmentation.
+    /// Validate the input and sample the solid. The remaining work happens in
+    /// [`Segmenter::step`].
     pub fn new(mesh: &Mesh, params: &Params) -> Result<Self, Error> {
         params.validate()?;
-        Ok(Self { params: params.clone(), tri: mesh.triangles().len() })
-    }
-
-    /// Run one step; `None` when done.
-    pub fn step(&mut self) -> Option<Step> {
-        None
-    }
-
-    /// The result.
-    pub fn finish(self) -> Segmentation {
-        let _ = BoundingKind::Ellipsoid;
-        let v = crate::bounding::mvee::mvee(&[glam::DVec3::ZERO], 1e-3, 1.0);
-        Segmentation {
-            kind: self.params.bounding,
-            parts: vec![Part { volume: v, fraction: 1.0, samples: 1, ov: 0.0, e: 1.0 }],
-            metrics: Metrics { k: 1, f: 1.0, tov: 0.0, mov: 0.0, samples: 1 },
-            history: vec![],
-            hierarchy: vec![],
-            triangle_parts: vec![0; self.tri],
-            sample_parts: vec![0],
-            cell_size: 1.0,
+        let grid = Grid::from_mesh(mesh, params.samples)?;
+        if grid.len() < 8 {
+            return Err(Error::NoVolume(format!(
+                "only {} grid cells lie inside the mesh",
+                grid.len()
+            )));
         }
+        let (comps, ncomp) = solid_components(&grid);
+        let solid = Solid::new(grid);
+        let fitter = Fitter::new(mesh, &solid, params.bounding);
+        Ok(Self {
+            mesh: mesh.clone(),
+            params: params.clone(),
+            solid,
+            comps,
+            ncomp,
+            fitter,
+            phase: Phase::Start,
+            state: None,
+            tries: Vec::new(),
+            first_try: None,
+            history: Vec::new(),
+            result: None,
+        })
+    }
+
+    /// The sampling grid.
+    pub fn grid(&self) -> &Grid {
+        &self.solid.grid
+    }
+
+    /// The refinement history so far.
+    pub fn history(&self) -> &[Step] {
+        &self.history
+    }
+
+    /// The current part of each sample (empty before the first step).
+    pub fn labels(&self) -> &[u32] {
+        self.state.as_ref().map_or(&[], |s| &s.part.labels)
+    }
+
+    /// The current refinement-time bounding volumes (empty before the first step).
+    pub fn volumes(&self) -> &[BoundingVolume] {
+        self.state.as_ref().map_or(&[], |s| &s.volumes)
+    }
+
+    /// Whether [`Segmenter::step`] has returned `None`.
+    pub fn is_done(&self) -> bool {
+        self.phase == Phase::Done
+    }
+
+    /// Fit (or fetch from the cache) every part's output volume, and measure.
+    fn evaluate(&mut self, part: Partition) -> State {
+        let fits = self
+            .fitter
+            .fit_all(&self.mesh, &self.solid, &part.labels, &part.parts);
+        self.state_with(part, fits)
+    }
+
+    fn state_with(&self, part: Partition, fits: Vec<Arc<Fit>>) -> State {
+        let counts: Vec<f64> = part.parts.iter().map(|m| m.n).collect();
+        let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume).collect();
+        let cells: Vec<&[[i64; 3]]> = fits.iter().map(|f| f.outside.as_slice()).collect();
+        let o = outside_from_cells(&cells, &counts);
+        State {
+            f: part.f(),
+            part,
+            fits,
+            volumes,
+            tov: o.tov,
+            mov: o.mov,
+            ov: o.ov,
+        }
+    }
+
+    fn record(&mut self, kind: StepKind, s: &State) -> Step {
+        let step = Step {
+            kind,
+            k: s.part.k(),
+            f: s.f,
+            tov: s.tov,
+            mov: s.mov,
+        };
+        self.history.push(step);
+        step
+    }
+
+    fn meets(&self, s: &State) -> bool {
+        s.tov < self.params.tov && s.mov < self.params.mov
+    }
+
+    /// Do the next step and report it; `None` when the segmentation is complete.
+    pub fn step(&mut self) -> Option<Step> {
+        loop {
+            match self.phase {
+                Phase::Start => return Some(self.start()),
+                Phase::Refine => {
+                    if let Some(s) = self.refine() {
+                        return Some(s);
+                    }
+                }
+                Phase::Merge => {
+                    if let Some(s) = self.merge() {
+                        return Some(s);
+                    }
+                }
+                Phase::Final => return Some(self.finalize()),
+                Phase::Done => return None,
+            }
+        }
+    }
+
+    fn start(&mut self) -> Step {
+        let k = match self.params.k {
+            Some(k) => k,
+            None => self.ncomp.min(self.params.max_k),
+        }
+        .min(self.solid.len());
+        let mut part = cvt(&self.solid, &self.comps, self.ncomp, k, self.params.seed);
+        optimize(
+            &self.solid,
+            &self.comps,
+            &mut part,
+            None,
+            None,
+            self.params.max_sweeps,
+        );
+        let s = self.evaluate(part);
+        let step = self.record(StepKind::Initial, &s);
+        self.state = Some(s);
+        self.phase = if self.params.k.is_some() {
+            Phase::Final
+        } else {
+            Phase::Refine
+        };
+        step
+    }
+
+    /// One split attempt; `None` when refinement is over (the phase has moved on).
+    fn refine(&mut self) -> Option<Step> {
+        let cur = self.state.as_ref()?;
+        let k = cur.part.k();
+        if self.meets(cur) || k >= self.params.max_k || k >= self.solid.len() / 2 {
+            self.phase = if self.params.merge {
+                Phase::Merge
+            } else {
+                Phase::Final
+            };
+            return None;
+        }
+        if self.tries.is_empty() && self.first_try.is_none() {
+            // While TOV is too large, the part that adds the most outside volume is the one to
+            // split (the paper's largest OV favours small parts, whose split barely moves TOV);
+            // once only MOV is too large, the largest OV, as in the paper.
+            let tov_bad = cur.tov >= self.params.tov;
+            let weight = |i: usize| {
+                if tov_bad {
+                    cur.ov[i] * cur.part.parts[i].n
+                } else {
+                    cur.ov[i]
+                }
+            };
+            let mut order: Vec<usize> = (0..k).collect();
+            order.sort_by(|&a, &b| weight(b).total_cmp(&weight(a)).then(a.cmp(&b)));
+            order.truncate(SPLIT_TRIES);
+            order.reverse();
+            self.tries = order;
+        }
+        while let Some(i) = self.tries.pop() {
+            let cur = self.state.as_ref()?;
+            let Some(mut part) = split(&self.solid, &self.comps, &cur.part, i) else {
+                continue;
+            };
+            let mut active: Vec<u32> = cur
+                .part
+                .adjacency(&self.solid.grid)
+                .iter()
+                .filter_map(|&(a, b)| {
+                    if a as usize == i {
+                        Some(b)
+                    } else if b as usize == i {
+                        Some(a)
+                    } else {
+                        None
+                    }
+                })
+                .collect();
+            active.push(i as u32);
+            active.push(k as u32);
+            active.sort_unstable();
+            // The two halves settle by Lloyd sweeps; their neighbours adjust by boundary moves.
+            optimize(
+                &self.solid,
+                &self.comps,
+                &mut part,
+                Some(&[i as u32, k as u32]),
+                Some(&active),
+                self.params.max_sweeps,
+            );
+            let cand = self.evaluate(part);
+            let cur = self.state.as_ref()?;
+            // A split is kept if it improves the figure that is out of tolerance.
+            let better = if cur.tov >= self.params.tov {
+                cand.tov < cur.tov
+            } else {
+                cand.mov < cur.mov
+            };
+            if better {
+                self.tries.clear();
+                self.first_try = None;
+                let step = self.record(StepKind::Split, &cand);
+                self.state = Some(cand);
+                return Some(step);
+            }
+            let step = self.record(StepKind::Backtrack, &cand);
+            if self.first_try.is_none() {
+                self.first_try = Some(cand);
+            }
+            if !self.tries.is_empty() {
+                return Some(step);
+            }
+        }
+        // Every try made TOV worse: keep the first (the part with the largest OV), as the
+        // paper does, so that refinement always progresses.
+        match self.first_try.take() {
+            Some(s) => {
+                let step = self.record(StepKind::Split, &s);
+                self.state = Some(s);
+                Some(step)
+            }
+            None => {
+                // No part could be split at all.
+                self.phase = Phase::Final;
+                None
+            }
+        }
+    }
+
+    /// One merge; `None` when no merge helps (the phase has moved on).
+    fn merge(&mut self) -> Option<Step> {
+        let cur = self.state.as_ref()?;
+        let pairs = cur.part.adjacency(&self.solid.grid);
+        // Fit the merged parts missing from the cache: the hull of the union is the hull of
+        // the two hulls.
+        let todo: Vec<(Moments, Vec<DVec3>)> = pairs
+            .iter()
+            .map(|&(a, b)| {
+                let m = cur.part.parts[a as usize].merged(&cur.part.parts[b as usize]);
+                let mut pts = cur.fits[a as usize].hull.clone();
+                pts.extend_from_slice(&cur.fits[b as usize].hull);
+                (m, pts)
+            })
+            .collect();
+        self.fitter.fit_candidates(&self.solid, todo);
+        let cur = self.state.as_ref()?;
+        let met = self.meets(cur);
+        let total = self.solid.len() as f64;
+        // Judge each merge by its change of the union's outside cells, incrementally.
+        let mut cov = Coverage::new(&self.solid);
+        for f in &cur.fits {
+            cov.add(&f.outside);
+        }
+        let mut best: Option<(f64, f64, usize, usize)> = None;
+        for (a, b) in pairs {
+            let (a, b) = (a as usize, b as usize);
+            let m = cur.part.parts[a].merged(&cur.part.parts[b]);
+            let Some(fit) = self.fitter.get(&m) else {
+                continue;
+            };
+            cov.remove(&cur.fits[a].outside);
+            cov.remove(&cur.fits[b].outside);
+            cov.add(&fit.outside);
+            let tov = cov.union as f64 / total;
+            cov.remove(&fit.outside);
+            cov.add(&cur.fits[a].outside);
+            cov.add(&cur.fits[b].outside);
+            let ov = fit.outside.len() as f64 / m.n;
+            let mov = (0..cur.ov.len())
+                .filter(|&i| i != a && i != b)
+                .map(|i| cur.ov[i])
+                .fold(ov, f64::max);
+            let ok = tov < cur.tov
+                && (!met || (tov < self.params.tov && mov < self.params.mov));
+            if ok && best.is_none_or(|x| tov < x.0) {
+                best = Some((tov, mov, a, b));
+            }
+        }
+        let best = best.map(|(_, _, a, b)| {
+            let mut part = cur.part.clone();
+            for l in part.labels.iter_mut() {
+                if *l as usize == b {
+                    *l = a as u32;
+                }
+            }
+            let mb = part.parts[b];
+            part.parts[a] = part.parts[a].merged(&mb);
+            part.parts[b] = Moments::default();
+            part.remove_empty_part(b);
+            part
+        });
+        let best = best.map(|p| self.evaluate(p));
+        match best {
+            Some(s) => {
+                let step = self.record(StepKind::Merge, &s);
+                self.state = Some(s);
+                Some(step)
+            }
+            None => {
+                self.phase = Phase::Final;
+                None
+            }
+        }
+    }
+
+    fn finalize(&mut self) -> Step {
+        let Some(cur) = self.state.take() else {
+            self.phase = Phase::Done;
+            return Step {
+                kind: StepKind::Final,
+                k: 0,
+                f: f64::NAN,
+                tov: f64::NAN,
+                mov: f64::NAN,
+            };
+        };
+        let cur = if self.params.polish {
+            let mut part = cur.part;
+            tighten(
+                &self.mesh,
+                &self.solid,
+                &self.comps,
+                &mut self.fitter,
+                &mut part,
+                TIGHTEN_PASSES,
+                self.params.mov,
+            );
+            self.evaluate(part)
+        } else {
+            cur
+        };
+        let k = cur.part.k();
+        let n = self.solid.len() as f64;
+        let parts: Vec<Part> = (0..k)
+            .map(|i| Part {
+                volume: cur.volumes[i],
+                fraction: cur.part.parts[i].n / n,
+                samples: cur.part.parts[i].n as usize,
+                ov: cur.ov[i],
+                e: cur.part.e(i),
+            })
+            .collect();
+        let adjacency = cur.part.adjacency(&self.solid.grid);
+        let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
+        let hierarchy = hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
+            self.fitter.fit_points(&self.solid, p)
+        });
+        let metrics = Metrics {
+            k,
+            f: cur.f,
+            tov: cur.tov,
+            mov: cur.mov,
+            samples: self.solid.len(),
+        };
+        let step = self.record(StepKind::Final, &cur);
+        self.result = Some(Segmentation {
+            kind: self.params.bounding,
+            parts,
+            metrics,
+            history: self.history.clone(),
+            hierarchy,
+            triangle_parts: self.fitter.enclosure().triangle_parts(&cur.part.labels),
+            sample_parts: cur.part.labels.clone(),
+            cell_size: self.solid.grid.h,
+        });
+        self.state = Some(cur);
+        self.phase = Phase::Done;
+        step
+    }
+
+    /// Run any remaining steps and return the result.
+    pub fn finish(mut self) -> Segmentation {
+        while self.step().is_some() {}
+        self.result.take().unwrap_or_else(|| Segmentation {
+            kind: self.params.bounding,
+            parts: Vec::new(),
+            metrics: Metrics {
+                k: 0,
+                f: f64::NAN,
+                tov: f64::NAN,
+                mov: f64::NAN,
+                samples: self.solid.len(),
+            },
+            history: self.history.clone(),
+            hierarchy: Vec::new(),
+            triangle_parts: Vec::new(),
+            sample_parts: Vec::new(),
+            cell_size: self.solid.grid.h,
+        })
     }
 }

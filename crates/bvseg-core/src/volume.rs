@@ -90,9 +90,15 @@ impl BoundingVolume {
                 (DVec3::new(a.x_axis.z, a.y_axis.z, a.z_axis.z) * r).length(),
             ),
             Shape::Obb => DVec3::new(
-                (DVec3::new(a.x_axis.x, a.y_axis.x, a.z_axis.x) * r).abs().element_sum(),
-                (DVec3::new(a.x_axis.y, a.y_axis.y, a.z_axis.y) * r).abs().element_sum(),
-                (DVec3::new(a.x_axis.z, a.y_axis.z, a.z_axis.z) * r).abs().element_sum(),
+                (DVec3::new(a.x_axis.x, a.y_axis.x, a.z_axis.x) * r)
+                    .abs()
+                    .element_sum(),
+                (DVec3::new(a.x_axis.y, a.y_axis.y, a.z_axis.y) * r)
+                    .abs()
+                    .element_sum(),
+                (DVec3::new(a.x_axis.z, a.y_axis.z, a.z_axis.z) * r)
+                    .abs()
+                    .element_sum(),
             ),
         };
         (self.center - half, self.center + half)
@@ -101,7 +107,10 @@ impl BoundingVolume {
     /// Scale the radii uniformly so that every point of `points` satisfies `gauge <= 1`
     /// (exactly, up to a relative margin of 1e-12), keeping the shape if it already holds them.
     pub fn scaled_to_contain(mut self, points: impl IntoIterator<Item = DVec3>) -> Self {
-        let g = points.into_iter().map(|p| self.gauge(p)).fold(0.0f64, f64::max);
+        let g = points
+            .into_iter()
+            .map(|p| self.gauge(p))
+            .fold(0.0f64, f64::max);
         if g > 1.0 {
             self.radii *= g * (1.0 + 1e-12);
         }

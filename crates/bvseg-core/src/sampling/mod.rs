@@ -42,7 +42,7 @@ impl Grid {
     pub fn from_mesh(mesh: &Mesh, target: usize) -> Result<Self, Error> {
         let (lo, hi) = mesh.bbox();
         let ext = hi - lo;
-        if !(ext.min_element() > 0.0) || !ext.is_finite() {
+        if ext.min_element() <= 0.0 || !ext.is_finite() {
             return Err(Error::NoVolume(format!(
                 "the bounding box is flat ({:.3e} x {:.3e} x {:.3e})",
                 ext.x, ext.y, ext.z
@@ -50,7 +50,7 @@ impl Grid {
         }
         let box_vol = ext.x * ext.y * ext.z;
         let mut vol = mesh.signed_volume().abs();
-        if !(vol > box_vol * 1e-9) || vol > box_vol {
+        if vol.is_nan() || vol <= box_vol * 1e-9 || vol > box_vol {
             vol = box_vol * 0.25;
         }
         let target = target.max(1) as f64;
@@ -198,7 +198,11 @@ fn lattice_for_box(lo: DVec3, hi: DVec3, h: f64, max_cells: f64) -> (DVec3, [usi
     let n = (ext / h).ceil() + 3.0;
     let dims = [n.x as usize, n.y as usize, n.z as usize];
     // Centre the lattice on the box so the margin is symmetric.
-    let span = DVec3::new(dims[0] as f64 - 1.0, dims[1] as f64 - 1.0, dims[2] as f64 - 1.0) * h;
+    let span = DVec3::new(
+        dims[0] as f64 - 1.0,
+        dims[1] as f64 - 1.0,
+        dims[2] as f64 - 1.0,
+    ) * h;
     let origin = 0.5 * (lo + hi) - 0.5 * span;
     (origin, dims, h)
 }

@@ -1,0 +1,261 @@
+//! End-to-end runs of the `bvseg` binary.
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_bvseg");
+/// Small enough to keep each run well under a second in debug builds.
+const FAST: [&str; 2] = ["--samples", "2000"];
+
+/// A fresh, empty working directory for one test.
+fn scratch(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("bvseg-cli-tests")
+        .join(test);
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn bvseg(dir: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn segment(dir: &Path, args: &[&str]) -> Output {
+    let mut v = vec!["segment"];
+    v.extend_from_slice(&FAST);
+    v.extend_from_slice(args);
+    bvseg(dir, &v)
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Exit code 2, exactly one stderr line `bvseg: error: ...` containing `needle`.
+fn assert_fails(o: &Output, needle: &str) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert_eq!(err.lines().count(), 1, "expected one line, got: {err}");
+    assert!(err.starts_with("bvseg: error: "), "{err}");
+    assert!(err.contains(needle), "{needle:?} not in {err:?}");
+    assert!(
+        o.stdout.is_empty(),
+        "stdout: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+fn parse(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn bundled_mesh_k2_writes_the_schema() {
+    let dir = scratch("bundled_mesh_k2_writes_the_schema");
+    let o = segment(&dir, &["--k", "2", "-o", "out.json"]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("no mesh given; using the bundled assets/meshes/bunny.obj"),
+        "{err}"
+    );
+    let out = String::from_utf8(o.stdout).unwrap();
+    for key in [
+        "mesh",
+        "triangles  3674",
+        "samples",
+        "k ",
+        "F ",
+        "TOV",
+        "MOV",
+        "time",
+        "output     out.json",
+    ] {
+        assert!(out.contains(key), "{key:?} not in summary:\n{out}");
+    }
+
+    let doc = parse(&dir.join("out.json"));
+    assert_eq!(doc["schema"], "bvseg.volumes/1");
+    assert_eq!(doc["kind"], "ellipsoid");
+    assert!(doc["generator"].as_str().unwrap().starts_with("bvseg "));
+    let vols = doc["volumes"].as_array().unwrap();
+    assert!(!vols.is_empty());
+    assert_eq!(doc["metrics"]["k"].as_u64().unwrap() as usize, vols.len());
+    for key in ["tov", "mov", "samples", "f"] {
+        assert!(doc["metrics"][key].is_number(), "metrics.{key}");
+    }
+    let sum: f64 = vols.iter().map(|v| v["fraction"].as_f64().unwrap()).sum();
+    assert!((sum - 1.0).abs() < 1e-3, "fractions sum to {sum}");
+    for v in vols {
+        assert_eq!(v["shape"], "ellipsoid");
+        assert_eq!(v["axes"].as_array().unwrap().len(), 3);
+        assert!(v["radii"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|r| r.as_f64().unwrap() > 0.0));
+    }
+    assert!(doc.get("triangle_parts").is_none());
+    assert_eq!(files(&dir), ["out.json"]);
+}
+
+#[test]
+fn explicit_mesh_and_kinds() {
+    let dir = scratch("explicit_mesh_and_kinds");
+    let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
+    for kind in ["obb", "mixed"] {
+        let out = format!("{kind}.json");
+        let o = segment(
+            &dir,
+            &[mesh, "--k", "2", "--bv", kind, "-o", &out, "--quiet"],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(o.stderr.is_empty(), "--quiet printed: {}", stderr(&o));
+        assert_eq!(parse(&dir.join(&out))["kind"], kind);
+    }
+}
+
+#[test]
+fn same_run_twice_is_byte_identical() {
+    let dir = scratch("same_run_twice_is_byte_identical");
+    for out in ["a.json", "b.json"] {
+        let o = segment(&dir, &["--k", "2", "-o", out, "-q"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert_eq!(
+        fs::read(dir.join("a.json")).unwrap(),
+        fs::read(dir.join("b.json")).unwrap()
+    );
+}
+
+#[test]
+fn thread_count_does_not_change_the_file() {
+    let dir = scratch("thread_count_does_not_change_the_file");
+    for t in ["1", "2"] {
+        let out = format!("t{t}.json");
+        let o = segment(&dir, &["--k", "2", "--threads", t, "-o", &out, "-q"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert_eq!(
+        fs::read(dir.join("t1.json")).unwrap(),
+        fs::read(dir.join("t2.json")).unwrap()
+    );
+}
+
+#[test]
+fn tolerance_mode_runs() {
+    let dir = scratch("tolerance_mode_runs");
+    let o = segment(
+        &dir,
+        &[
+            "--tov", "0.5", "--mov", "0.8", "--max-k", "4", "-o", "v.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(parse(&dir.join("v.json"))["metrics"]["k"].as_u64().unwrap() <= 4);
+}
+
+#[test]
+fn missing_mesh_fails_cleanly() {
+    let dir = scratch("missing_mesh_fails_cleanly");
+    let o = segment(&dir, &["missing.obj", "-o", "out.json"]);
+    assert_fails(&o, "missing.obj: cannot open");
+    assert!(files(&dir).is_empty());
+}
+
+#[test]
+fn garbage_mesh_fails_cleanly() {
+    let dir = scratch("garbage_mesh_fails_cleanly");
+    fs::write(dir.join("garbage.obj"), "this is\nnot a mesh\n").unwrap();
+    let o = segment(&dir, &["garbage.obj", "-o", "out.json"]);
+    assert_fails(&o, "garbage.obj: no triangles");
+
+    let bytes: Vec<u8> = (0..5000u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 11) as u8)
+        .collect();
+    fs::write(dir.join("binary.obj"), bytes).unwrap();
+    let o = segment(&dir, &["binary.obj", "-o", "out.json"]);
+    assert_fails(&o, "binary.obj: ");
+
+    fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 x\nf 1 2 3\n").unwrap();
+    let o = segment(&dir, &["bad.obj", "-o", "out.json"]);
+    assert_fails(&o, "bad.obj: line 3: bad vertex");
+
+    fs::write(dir.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = segment(&dir, &["flat.obj", "-o", "out.json"]);
+    // Rejected by the core (no volume) once it lands; the placeholder accepts it.
+    if !o.status.success() {
+        assert_fails(&o, "flat.obj: ");
+    }
+
+    let mut expected = vec!["bad.obj", "binary.obj", "flat.obj", "garbage.obj"];
+    if o.status.success() {
+        expected.push("out.json");
+    }
+    assert_eq!(files(&dir), expected);
+}
+
+#[test]
+fn unsupported_formats_fail_cleanly() {
+    let dir = scratch("unsupported_formats_fail_cleanly");
+    fs::write(dir.join("part.stl"), "solid x\nendsolid x\n").unwrap();
+    let o = segment(&dir, &["part.stl", "-o", "out.json"]);
+    assert_fails(&o, "part.stl: unsupported mesh format '.stl'");
+
+    let o = segment(&dir, &["--k", "2", "-o", "out.ply"]);
+    assert_fails(&o, "out.ply: unsupported output format '.ply'");
+
+    let o = segment(&dir, &["--k", "2", "-o", "nodir/out.json"]);
+    assert_fails(&o, "does not exist");
+    assert_eq!(files(&dir), ["part.stl"]);
+}
+
+#[test]
+fn bad_parameters_fail_cleanly() {
+    let dir = scratch("bad_parameters_fail_cleanly");
+    let o = segment(&dir, &["--k", "0", "-o", "out.json"]);
+    assert_fails(&o, "k must be at least 1");
+    let o = segment(&dir, &["--tov", "-1", "-o", "out.json"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = segment(&dir, &["--tov", "nan", "-o", "out.json"]);
+    assert_fails(&o, "tolerances must be finite");
+    let o = bvseg(&dir, &["segment", "--samples", "10", "-o", "out.json"]);
+    assert_fails(&o, "samples must be between");
+    assert!(files(&dir).is_empty());
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    let dir = scratch("usage_errors_exit_2");
+    for args in [
+        &["segment", "--k", "2", "--tov", "0.2"][..],
+        &["segment", "--k", "2", "--mov", "0.2"],
+        &["segment", "--bv", "sphere"],
+        &["segment", "--threads", "0"],
+        &["segment", "--k", "two"],
+        &["segment", "--frobnicate"],
+        &["frobnicate"],
+        &[],
+    ] {
+        let o = bvseg(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+    }
+    assert!(files(&dir).is_empty());
+    let o = bvseg(&dir, &["--version"]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("bvseg "));
+}

@@ -1,0 +1,178 @@
+//! Output volumes of parts, fitted once per distinct part and cached.
+//!
+//! A part's volume depends only on its set of samples (through the points it must enclose,
+//! see [`crate::enclosure`]), and that set is identified by the part's exact moments (integer
+//! sums, see [`crate::partition`]). The refinement and the tightening try many partitions
+//! that differ in a few parts; the cache makes each try cost only the parts it changed.
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::bounding::hull::hull_points;
+use crate::bounding::mvee::mvee;
+use crate::bounding::obb::min_obb;
+use crate::enclosure::Enclosure;
+use crate::metrics::outside_cells;
+use crate::moments::Moments;
+use crate::partition::Solid;
+use crate::{BoundingKind, BoundingVolume, Mesh};
+
+/// Tolerance of the ellipsoid fit (relative volume excess over the optimum).
+pub const MVEE_TOL: f64 = 1e-4;
+
+/// A part's convex-hull points, fitted volume, and the lattice cells outside the solid that
+/// the volume covers.
+#[derive(Debug)]
+pub struct Fit {
+    /// Convex-hull vertices of the points the part must enclose.
+    pub hull: Vec<DVec3>,
+    /// The fitted volume.
+    pub volume: BoundingVolume,
+    /// Lattice cells outside the solid whose centres the volume contains.
+    pub outside: Vec<[i64; 3]>,
+}
+
+/// Cache key: the part's exact moments.
+pub type FitKey = [u64; 10];
+
+/// The cache key of a part with moments `m`.
+pub fn fit_key(m: &Moments) -> FitKey {
+    [
+        m.n.to_bits(),
+        m.s.x.to_bits(),
+        m.s.y.to_bits(),
+        m.s.z.to_bits(),
+        m.ss[0].to_bits(),
+        m.ss[1].to_bits(),
+        m.ss[2].to_bits(),
+        m.ss[3].to_bits(),
+        m.ss[4].to_bits(),
+        m.ss[5].to_bits(),
+    ]
+}
+
+/// Fits volumes of one kind to parts of one solid, with a cache.
+#[derive(Debug)]
+pub struct Fitter {
+    kind: BoundingKind,
+    enclosure: Enclosure,
+    cache: HashMap<FitKey, Arc<Fit>>,
+}
+
+impl Fitter {
+    /// A fitter for `mesh` sampled as `solid`.
+    pub fn new(mesh: &Mesh, solid: &Solid, kind: BoundingKind) -> Self {
+        Self {
+            kind,
+            enclosure: Enclosure::new(mesh, solid),
+            cache: HashMap::new(),
+        }
+    }
+
+    /// The enclosure data (which triangles each part holds).
+    pub fn enclosure(&self) -> &Enclosure {
+        &self.enclosure
+    }
+
+    /// Fit a volume of this fitter's kind to `points` (typically hull points).
+    pub fn fit_points(&self, solid: &Solid, points: &[DVec3]) -> BoundingVolume {
+        let min_r = 0.5 * solid.grid.h;
+        match self.kind {
+            BoundingKind::Ellipsoid => mvee(points, MVEE_TOL, min_r),
+            BoundingKind::Obb => min_obb(points, min_r),
+            BoundingKind::Mixed => {
+                let e = mvee(points, MVEE_TOL, min_r);
+                let b = min_obb(points, min_r);
+                if b.volume() < e.volume() {
+                    b
+                } else {
+                    e
+                }
+            }
+        }
+    }
+
+    fn make(&self, solid: &Solid, points: &[DVec3]) -> Fit {
+        let hull = hull_points(points);
+        let volume = self.fit_points(solid, &hull);
+        let outside = outside_cells(&solid.grid, &volume);
+        Fit {
+            hull,
+            volume,
+            outside,
+        }
+    }
+
+    /// The cached fit of a part with moments `m`, if any.
+    pub fn get(&self, m: &Moments) -> Option<Arc<Fit>> {
+        self.cache.get(&fit_key(m)).cloned()
+    }
+
+    /// Fit every part of a labelling: `parts[i]` are the moments of part `i`, `labels` the
+    /// part of each sample. Only parts missing from the cache are fitted (in parallel).
+    pub fn fit_all(
+        &mut self,
+        mesh: &Mesh,
+        solid: &Solid,
+        labels: &[u32],
+        parts: &[Moments],
+    ) -> Vec<Arc<Fit>> {
+        let keys: Vec<FitKey> = parts.iter().map(fit_key).collect();
+        let missing: Vec<usize> = (0..parts.len())
+            .filter(|&i| !self.cache.contains_key(&keys[i]))
+            .collect();
+        if !missing.is_empty() {
+            let mut members = vec![Vec::new(); parts.len()];
+            for (s, &l) in labels.iter().enumerate() {
+                members[l as usize].push(s as u32);
+            }
+            let one = |&i: &usize| {
+                let pts = self
+                    .enclosure
+                    .points(mesh, solid, labels, &members[i], i as u32);
+                self.make(solid, &pts)
+            };
+            let new: Vec<Fit> = {
+                #[cfg(feature = "parallel")]
+                {
+                    use rayon::prelude::*;
+                    missing.par_iter().map(one).collect()
+                }
+                #[cfg(not(feature = "parallel"))]
+                {
+                    missing.iter().map(one).collect()
+                }
+            };
+            for (&i, f) in missing.iter().zip(new) {
+                self.cache.insert(keys[i], Arc::new(f));
+            }
+        }
+        keys.iter().map(|k| self.cache[k].clone()).collect()
+    }
+
+    /// Fit parts given directly by their enclosure points, keyed by their moments (for
+    /// candidate parts that are not in any labelling yet). Runs in parallel.
+    pub fn fit_candidates(&mut self, solid: &Solid, cands: Vec<(Moments, Vec<DVec3>)>) {
+        let todo: Vec<(FitKey, Vec<DVec3>)> = cands
+            .into_iter()
+            .map(|(m, p)| (fit_key(&m), p))
+            .filter(|(k, _)| !self.cache.contains_key(k))
+            .collect();
+        let one = |(k, p): &(FitKey, Vec<DVec3>)| (*k, self.make(solid, p));
+        let new: Vec<(FitKey, Fit)> = {
+            #[cfg(feature = "parallel")]
+            {
+                use rayon::prelude::*;
+                todo.par_iter().map(one).collect()
+            }
+            #[cfg(not(feature = "parallel"))]
+            {
+                todo.iter().map(one).collect()
+            }
+        };
+        for (k, f) in new {
+            self.cache.entry(k).or_insert_with(|| Arc::new(f));
+        }
+    }
+}

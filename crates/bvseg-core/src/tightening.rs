@@ -1,0 +1,308 @@
+//! Beyond the paper: lowering the real outside volume by boundary-layer moves.
+//!
+//! F is a proxy: a lower F does not always mean a tighter union of output volumes. After F
+//! is optimised, this stage moves the layer of samples that one part shares with a
+//! neighbour (all its samples that touch the neighbour) into that neighbour whenever the
+//! union of the *output* volumes, refitted to the two changed parts, then sticks out of the
+//! solid less (TOV drops), without pushing either part's OV past the larger of its old OV
+//! and the tolerance. Parts stay connected. Each pass evaluates every candidate move against
+//! the current state (in parallel, fits cached), then applies the improving moves in order of
+//! gain, each re-checked exactly against the state left by the ones before.
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use crate::fitting::{Fit, Fitter};
+use crate::moments::Moments;
+use crate::partition::{Partition, Solid};
+use crate::sampling::NONE;
+use crate::Mesh;
+
+/// How many lattice cells outside the solid each cell is covered by, and how many are
+/// covered at all.
+#[derive(Debug, Clone)]
+pub struct Coverage {
+    lo: [i64; 3],
+    n: [i64; 3],
+    count: Vec<u16>,
+    extra: HashMap<[i64; 3], u32>,
+    /// Number of covered cells (the union's outside volume in cells).
+    pub union: usize,
+}
+
+impl Coverage {
+    /// An empty coverage over the solid's lattice with a margin of half its size around it
+    /// (cells beyond fall back to a hash map).
+    pub fn new(solid: &Solid) -> Self {
+        let d = solid.grid.dims;
+        let m = [
+            d[0] as i64 / 2 + 2,
+            d[1] as i64 / 2 + 2,
+            d[2] as i64 / 2 + 2,
+        ];
+        let lo = [-m[0], -m[1], -m[2]];
+        let n = [
+            d[0] as i64 + 2 * m[0],
+            d[1] as i64 + 2 * m[1],
+            d[2] as i64 + 2 * m[2],
+        ];
+        Self {
+            lo,
+            n,
+            count: vec![0; (n[0] * n[1] * n[2]) as usize],
+            extra: HashMap::new(),
+            union: 0,
+        }
+    }
+
+    #[inline]
+    fn slot(&mut self, c: &[i64; 3]) -> Option<&mut u16> {
+        let r = [c[0] - self.lo[0], c[1] - self.lo[1], c[2] - self.lo[2]];
+        if (0..3).all(|d| r[d] >= 0 && r[d] < self.n[d]) {
+            let i = r[0] + self.n[0] * (r[1] + self.n[1] * r[2]);
+            Some(&mut self.count[i as usize])
+        } else {
+            None
+        }
+    }
+
+    /// Cover `cells` once more.
+    pub fn add(&mut self, cells: &[[i64; 3]]) {
+        for c in cells {
+            let was = match self.slot(c) {
+                Some(v) => {
+                    *v += 1;
+                    *v - 1
+                }
+                None => {
+                    let v = self.extra.entry(*c).or_insert(0);
+                    *v += 1;
+                    (*v - 1) as u16
+                }
+            };
+            if was == 0 {
+                self.union += 1;
+            }
+        }
+    }
+
+    /// Undo one [`Coverage::add`] of `cells`.
+    pub fn remove(&mut self, cells: &[[i64; 3]]) {
+        for c in cells {
+            let now = match self.slot(c) {
+                Some(v) => {
+                    *v -= 1;
+                    *v
+                }
+                None => {
+                    let v = self.extra.entry(*c).or_insert(1);
+                    *v -= 1;
+                    *v as u16
+                }
+            };
+            if now == 0 {
+                self.union -= 1;
+            }
+        }
+    }
+}
+
+/// A candidate move: the samples of `from` that touch `to` go to `to`.
+struct Move {
+    from: u32,
+    to: u32,
+    layer: Vec<u32>,
+    m_from: Moments,
+    m_to: Moments,
+}
+
+/// Whether the samples of `label` other than those in `layer` (sorted) form one connected
+/// piece per component of the solid.
+fn stays_connected(
+    solid: &Solid,
+    comps: &[u32],
+    part: &Partition,
+    label: u32,
+    layer: &[u32],
+) -> bool {
+    let g = &solid.grid;
+    let inside = |s: u32| part.labels[s as usize] == label && layer.binary_search(&s).is_err();
+    let mut seen = vec![false; solid.len()];
+    let mut per_comp: BTreeMap<u32, bool> = BTreeMap::new();
+    for s in 0..solid.len() as u32 {
+        if !inside(s) || seen[s as usize] {
+            continue;
+        }
+        let c = comps[s as usize];
+        if per_comp.insert(c, true).is_some() {
+            return false;
+        }
+        let mut stack = vec![s];
+        seen[s as usize] = true;
+        while let Some(x) = stack.pop() {
+            for &t in &g.neighbors[x as usize] {
+                if t != NONE && !seen[t as usize] && inside(t) {
+                    seen[t as usize] = true;
+                    stack.push(t);
+                }
+            }
+        }
+    }
+    !per_comp.is_empty()
+}
+
+/// Run up to `passes` passes of boundary-layer moves on `part`; returns the moves made.
+/// `mov_tol` is the per-part tolerance (sigma_L) a move may not push a part's OV past
+/// (unless that part was already past it).
+pub fn tighten(
+    mesh: &Mesh,
+    solid: &Solid,
+    comps: &[u32],
+    fitter: &mut Fitter,
+    part: &mut Partition,
+    passes: usize,
+    mov_tol: f64,
+) -> usize {
+    let g = &solid.grid;
+    let mut fits: Vec<Arc<Fit>> = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
+    let mut cov = Coverage::new(solid);
+    for f in &fits {
+        cov.add(&f.outside);
+    }
+    let mut moves = 0;
+    for _ in 0..passes {
+        // Layers: the samples of `a` that touch `b`, for every ordered pair of touching parts.
+        let mut layers: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+        for s in 0..solid.len() {
+            let a = part.labels[s];
+            let mut last = NONE;
+            for &t in &g.neighbors[s] {
+                if t == NONE {
+                    continue;
+                }
+                let b = part.labels[t as usize];
+                if b != a && b != last {
+                    let l = layers.entry((a, b)).or_default();
+                    if l.last() != Some(&(s as u32)) {
+                        l.push(s as u32);
+                    }
+                    last = b;
+                }
+            }
+        }
+        let mut cands: Vec<Move> = Vec::new();
+        for ((a, b), layer) in layers {
+            let n_from = part.parts[a as usize].n as usize;
+            // Never empty a part, and keep moves local.
+            if 2 * layer.len() > n_from {
+                continue;
+            }
+            let mut m_from = part.parts[a as usize];
+            let mut m_to = part.parts[b as usize];
+            for &s in &layer {
+                m_from.remove(solid.q[s as usize]);
+                m_to.add(solid.q[s as usize]);
+            }
+            cands.push(Move {
+                from: a,
+                to: b,
+                layer,
+                m_from,
+                m_to,
+            });
+        }
+        // Fit the changed parts of every candidate (cached; in parallel).
+        let members = part.members();
+        let mut work = Vec::new();
+        for mv in &cands {
+            let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
+            let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
+            if fitter.get(&mv.m_from).is_none() {
+                let mem: Vec<u32> = members[mv.from as usize]
+                    .iter()
+                    .copied()
+                    .filter(|&s| !in_layer(s as usize))
+                    .collect();
+                let pts = fitter
+                    .enclosure()
+                    .points_with(mesh, solid, label_of, &mem, mv.from);
+                work.push((mv.m_from, pts));
+            }
+            if fitter.get(&mv.m_to).is_none() {
+                let mut mem = members[mv.to as usize].clone();
+                mem.extend_from_slice(&mv.layer);
+                let pts = fitter
+                    .enclosure()
+                    .points_with(mesh, solid, label_of, &mem, mv.to);
+                work.push((mv.m_to, pts));
+            }
+        }
+        fitter.fit_candidates(solid, work);
+        // Gains against the current state.
+        let ov = |f: &Fit, n: f64| f.outside.len() as f64 / n.max(1.0);
+        let mut scored: Vec<(i64, usize)> = Vec::new();
+        for (i, mv) in cands.iter().enumerate() {
+            let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
+                continue;
+            };
+            let before = cov.union as i64;
+            cov.remove(&fits[mv.from as usize].outside);
+            cov.remove(&fits[mv.to as usize].outside);
+            cov.add(&fa.outside);
+            cov.add(&fb.outside);
+            let gain = before - cov.union as i64;
+            cov.remove(&fa.outside);
+            cov.remove(&fb.outside);
+            cov.add(&fits[mv.from as usize].outside);
+            cov.add(&fits[mv.to as usize].outside);
+            if gain > 0 {
+                scored.push((gain, i));
+            }
+        }
+        scored.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
+        let mut touched = vec![false; part.k()];
+        let mut applied = 0;
+        for (_, i) in scored {
+            let mv = &cands[i];
+            let (a, b) = (mv.from as usize, mv.to as usize);
+            if touched[a] || touched[b] {
+                continue;
+            }
+            let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
+                continue;
+            };
+            let limit = |old: &Fit, n_old: f64| ov(old, n_old).max(mov_tol);
+            if ov(&fa, mv.m_from.n) > limit(&fits[a], part.parts[a].n)
+                || ov(&fb, mv.m_to.n) > limit(&fits[b], part.parts[b].n)
+            {
+                continue;
+            }
+            let before = cov.union;
+            cov.remove(&fits[a].outside);
+            cov.remove(&fits[b].outside);
+            cov.add(&fa.outside);
+            cov.add(&fb.outside);
+            if cov.union >= before || !stays_connected(solid, comps, part, mv.from, &mv.layer) {
+                cov.remove(&fa.outside);
+                cov.remove(&fb.outside);
+                cov.add(&fits[a].outside);
+                cov.add(&fits[b].outside);
+                continue;
+            }
+            for &s in &mv.layer {
+                part.labels[s as usize] = mv.to;
+            }
+            part.parts[a] = mv.m_from;
+            part.parts[b] = mv.m_to;
+            fits[a] = fa;
+            fits[b] = fb;
+            touched[a] = true;
+            touched[b] = true;
+            applied += 1;
+        }
+        moves += applied;
+        if applied == 0 {
+            break;
+        }
+    }
+    moves
+}

@@ -1,0 +1,82 @@
+//! The one error type of this crate.
+use std::io;
+
+/// Everything that can go wrong while reading a mesh or writing a result. Every message is a
+/// single line that starts with the file it concerns, so a front end can print it as it is.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The operating system refused an operation on a file (open, read, write, rename, ...).
+    #[error("{name}: cannot {action}: {source}")]
+    Io {
+        /// The file, as the caller named it.
+        name: String,
+        /// What was being done, e.g. `open` or `write`.
+        action: &'static str,
+        /// The underlying error.
+        source: io::Error,
+    },
+    /// The input is larger than [`crate::MAX_INPUT_BYTES`].
+    #[error("{name}: the file is larger than {limit} bytes; refusing to load it")]
+    TooLarge {
+        /// The file, as the caller named it.
+        name: String,
+        /// The limit, in bytes.
+        limit: u64,
+    },
+    /// The file is not a well-formed mesh file.
+    #[error("{name}: {}{message}", line.map(|l| format!("line {l}: ")).unwrap_or_default())]
+    Parse {
+        /// The file, as the caller named it.
+        name: String,
+        /// The 1-based line of the problem, when it is known.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// The path cannot be used as asked (a directory where a file is needed, no file name).
+    #[error("{name}: {message}")]
+    BadPath {
+        /// The path, as the caller named it.
+        name: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The file parsed, but holds no usable triangle.
+    #[error("{name}: no triangles{}", if *.degenerate > 0 { format!(" ({} degenerate dropped)", .degenerate) } else { String::new() })]
+    NoTriangles {
+        /// The file, as the caller named it.
+        name: String,
+        /// How many triangles were dropped as degenerate after welding.
+        degenerate: usize,
+    },
+    /// The mesh was rejected by [`bvseg_core::Mesh::new`].
+    #[error("{name}: {source}")]
+    Mesh {
+        /// The file, as the caller named it.
+        name: String,
+        /// Why the core rejected it.
+        source: bvseg_core::Error,
+    },
+    /// The file's extension names a format this crate cannot read or write.
+    #[error("{name}: unsupported {what} format{} (supported: {supported})", ext.as_ref().map(|e| format!(" '.{e}'")).unwrap_or_else(|| " (no file extension)".into()))]
+    UnsupportedFormat {
+        /// The file, as the caller named it.
+        name: String,
+        /// `mesh` or `output`.
+        what: &'static str,
+        /// The extension, without the dot; `None` when the name has none.
+        ext: Option<String>,
+        /// The extensions that are supported, for the message.
+        supported: &'static str,
+    },
+}
+
+impl IoError {
+    pub(crate) fn io(name: &str, action: &'static str, source: io::Error) -> Self {
+        IoError::Io {
+            name: name.to_owned(),
+            action,
+            source,
+        }
+    }
+}

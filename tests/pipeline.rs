@@ -1,0 +1,176 @@
+//! End-to-end properties of the segmentation on analytic shapes and the bundled meshes.
+use bvseg::flooding::{is_connected, solid_components};
+use bvseg::sampling::Grid;
+use bvseg::shapes::{capsule, ellipsoid, union};
+use bvseg::{segment, BoundingKind, Mesh, Params, Segmentation};
+use glam::{DMat3, DVec3};
+
+fn bundled(name: &str) -> Mesh {
+    let path = format!("{}/assets/meshes/{name}", env!("CARGO_MANIFEST_DIR"));
+    bvseg::io::load_obj(&path).expect("bundled mesh loads")
+}
+
+/// Every triangle lies in the volume of its part (its three corners are inside, and the
+/// volume is convex), and every sample lies in the volume of its part.
+fn assert_encloses(mesh: &Mesh, seg: &Segmentation, grid: &Grid) {
+    for (t, &p) in seg.triangle_parts.iter().enumerate() {
+        let v = &seg.parts[p as usize].volume;
+        for c in mesh.corners(t) {
+            assert!(v.contains(c), "triangle {t} corner {c} escapes volume {p}");
+        }
+    }
+    for (s, &p) in seg.sample_parts.iter().enumerate() {
+        assert!(seg.parts[p as usize].volume.contains(grid.points[s]));
+    }
+}
+
+/// Fraction of the points of a finer, shifted lattice inside the solid that some volume
+/// holds: the check that no gap is left between neighbouring parts.
+fn interior_coverage(mesh: &Mesh, seg: &Segmentation, samples: usize) -> f64 {
+    let fine = Grid::from_mesh(mesh, samples).expect("fine grid");
+    let covered = fine
+        .points
+        .iter()
+        .filter(|&&p| seg.parts.iter().any(|part| part.volume.contains(p)))
+        .count();
+    covered as f64 / fine.len() as f64
+}
+
+#[test]
+fn two_disjoint_ellipsoids_give_two_tight_parts() {
+    let rot = DMat3::from_euler(glam::EulerRot::XYZ, 0.3, 0.5, 0.1);
+    let mesh = union(&[
+        ellipsoid(
+            DVec3::new(-3.0, 0.0, 0.0),
+            DVec3::new(1.5, 0.8, 0.5),
+            rot,
+            48,
+        ),
+        ellipsoid(
+            DVec3::new(3.0, 1.0, 0.0),
+            DVec3::new(0.7, 1.2, 0.9),
+            DMat3::IDENTITY,
+            48,
+        ),
+    ]);
+    let seg = segment(&mesh, &Params::default()).unwrap();
+    assert_eq!(seg.metrics.k, 2);
+    assert!(seg.metrics.f < 1.03, "F = {}", seg.metrics.f);
+    assert!(seg.metrics.f >= 0.99, "F = {}", seg.metrics.f);
+    assert!(seg.metrics.tov < 0.15, "TOV = {}", seg.metrics.tov);
+}
+
+#[test]
+fn dumbbell_splits_at_its_neck() {
+    let mesh = union(&[
+        ellipsoid(
+            DVec3::new(-2.0, 0.0, 0.0),
+            DVec3::splat(1.0),
+            DMat3::IDENTITY,
+            48,
+        ),
+        ellipsoid(
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::splat(1.0),
+            DMat3::IDENTITY,
+            48,
+        ),
+        capsule(
+            DVec3::new(-2.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            0.3,
+            32,
+        ),
+    ]);
+    let params = Params {
+        k: Some(2),
+        samples: 10_000,
+        ..Params::default()
+    };
+    let seg = segment(&mesh, &params).unwrap();
+    let grid = Grid::from_mesh(&mesh, params.samples).unwrap();
+    assert_eq!(seg.sample_parts.len(), grid.len());
+    let left = seg.sample_parts[grid
+        .points
+        .iter()
+        .position(|p| p.x < -2.5)
+        .expect("a left sample")];
+    for (s, p) in grid.points.iter().enumerate() {
+        // Everything beyond the neck's middle third belongs to its own ball's part.
+        if p.x < -0.7 {
+            assert_eq!(seg.sample_parts[s], left, "sample at {p}");
+        } else if p.x > 0.7 {
+            assert_ne!(seg.sample_parts[s], left, "sample at {p}");
+        }
+    }
+    assert_encloses(&mesh, &seg, &grid);
+}
+
+#[test]
+fn parts_are_connected_cover_every_sample_and_enclose_the_mesh() {
+    let mesh = bundled("bunny.obj");
+    for bounding in [
+        BoundingKind::Ellipsoid,
+        BoundingKind::Obb,
+        BoundingKind::Mixed,
+    ] {
+        let params = Params {
+            k: Some(12),
+            samples: 8_000,
+            bounding,
+            ..Params::default()
+        };
+        let seg = segment(&mesh, &params).unwrap();
+        let grid = Grid::from_mesh(&mesh, params.samples).unwrap();
+        assert_eq!(seg.parts.len(), 12);
+        assert_eq!(seg.sample_parts.len(), grid.len());
+        // Each sample in exactly one part: the counts add up.
+        let total: usize = seg.parts.iter().map(|p| p.samples).sum();
+        assert_eq!(total, grid.len());
+        let fsum: f64 = seg.parts.iter().map(|p| p.fraction).sum();
+        assert!((fsum - 1.0).abs() < 1e-9);
+        let (comps, _) = solid_components(&grid);
+        assert!(is_connected(&grid, &seg.sample_parts, &comps));
+        assert!(seg.metrics.f >= 1.0);
+        assert_encloses(&mesh, &seg, &grid);
+        let cov = interior_coverage(&mesh, &seg, 60_000);
+        assert!(cov >= 0.9999, "{bounding:?}: interior coverage {cov}");
+    }
+}
+
+#[test]
+fn auto_mode_meets_tolerances_on_the_bundled_meshes() {
+    for name in ["bunny.obj", "spot.obj", "fourleg_2.obj"] {
+        let mesh = bundled(name);
+        let seg = segment(&mesh, &Params::default()).unwrap();
+        let m = seg.metrics;
+        assert!(
+            m.tov < 0.3 && m.mov < 0.5,
+            "{name}: k {} TOV {} MOV {}",
+            m.k,
+            m.tov,
+            m.mov
+        );
+    }
+}
+
+#[test]
+fn same_seed_gives_identical_results_on_one_and_two_threads() {
+    let mesh = bundled("spot.obj");
+    let params = Params {
+        samples: 6_000,
+        ..Params::default()
+    };
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| segment(&mesh, &params).unwrap())
+    };
+    let a = run(1);
+    let b = run(2);
+    assert_eq!(a, b);
+    let c = run(2);
+    assert_eq!(b, c);
+}
