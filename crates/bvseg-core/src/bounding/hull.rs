@@ -662,9 +662,9 @@ impl InnerEllipsoid {
 }
 
 /// For rays from a point `c` strictly inside a polytope: a cube map of directions whose cells
-/// list every face the ray may leave through. A face is listed in a cell when the bounding caps
-/// of the face's and of the cell's central projections on the unit sphere overlap, which is
-/// conservative; the cells of a face are found by a flood fill from the one holding its centre.
+/// list every face the ray may leave through. A face is listed in a cell when its central
+/// projection on the unit sphere meets the cell's bounding cap, which is conservative; the
+/// cells of a face are found by a flood fill from the one holding its centre.
 struct DirMap {
     g: usize,
     start: Vec<u32>,
@@ -1031,6 +1031,21 @@ mod tests {
         let h = convex_hull(&pts);
         check_hull(&pts, &h);
         assert_eq!(h.vertices.len(), 500);
+    }
+
+    #[test]
+    fn round_off_below_tolerance_is_flat() {
+        // A square lattice whose points are off its plane by round-off only.
+        let mut rng = Rng::new(5);
+        let pts: Vec<DVec3> = (0..100)
+            .map(|i| {
+                let z = 1e-14 * (rng.next_f64() - 0.5);
+                DVec3::new((i % 10) as f64, (i / 10) as f64, z) + DVec3::splat(100.0)
+            })
+            .collect();
+        let h = convex_hull(&pts);
+        assert_eq!((h.dim, h.vertices.len()), (2, 4));
+        check_hull(&pts, &h);
     }
 
     #[test]

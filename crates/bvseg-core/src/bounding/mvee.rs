@@ -1001,6 +1001,18 @@ mod tests {
     }
 
     #[test]
+    fn fuzz_degenerate_sets() {
+        let mut rng = Rng::new(99);
+        for case in 0..300 {
+            let pts = crate::bounding::obb::tests::awkward_set(&mut rng, case);
+            let min_r = if case % 2 == 0 { 1e-3 } else { 1e-12 };
+            let e = mvee(&pts, 1e-3, min_r);
+            assert_contains(&e, &pts);
+            assert!(e.radii.min_element() >= min_r);
+        }
+    }
+
+    #[test]
     fn deterministic() {
         let mut rng = Rng::new(2);
         let pts = blob(&mut rng, 2000);
