@@ -491,7 +491,6 @@ impl Segmenter {
                 &mut part,
                 TIGHTEN_PASSES,
                 self.params.mov,
-                None,
             );
             self.evaluate(part)
         } else {

@@ -151,7 +151,6 @@ fn stays_connected(
 }
 
 /// Run up to `passes` passes of boundary-layer moves on `part`; returns the moves made.
-/// With `focus`, only moves between two parts of the focus set are tried.
 /// `mov_tol` is the per-part tolerance (sigma_L) a move may not push a part's OV past
 /// (unless that part was already past it).
 pub fn tighten(
@@ -162,7 +161,6 @@ pub fn tighten(
     part: &mut Partition,
     passes: usize,
     mov_tol: f64,
-    focus: Option<&[u32]>,
 ) -> usize {
     let g = &solid.grid;
     let mut fits: Vec<Arc<Fit>> = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
@@ -193,11 +191,7 @@ pub fn tighten(
             }
         }
         let mut cands: Vec<Move> = Vec::new();
-        let in_focus = |p: u32| focus.is_none_or(|f| f.binary_search(&p).is_ok());
         for ((a, b), layer) in layers {
-            if !in_focus(a) || !in_focus(b) {
-                continue;
-            }
             let n_from = part.parts[a as usize].n as usize;
             // Keep moves local, and never shrink a part below a quarter of an average part:
             // tiny parts have huge relative outside volumes (MOV).
