@@ -8,7 +8,10 @@ use bvseg::{segment, BoundingKind, Params};
 fn every_shared_mesh_is_enclosed_with_every_bounding_kind() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
     let Ok(entries) = std::fs::read_dir(&dir) else {
-        eprintln!("note: {} not found; shared-mesh enclosure test skipped", dir.display());
+        eprintln!(
+            "note: {} not found; shared-mesh enclosure test skipped",
+            dir.display()
+        );
         return;
     };
     let mut paths: Vec<_> = entries
@@ -19,7 +22,11 @@ fn every_shared_mesh_is_enclosed_with_every_bounding_kind() {
     assert!(!paths.is_empty());
     for path in paths {
         let mesh = bvseg::io::load_obj(&path).expect("shared mesh loads");
-        for bounding in [BoundingKind::Ellipsoid, BoundingKind::Obb, BoundingKind::Mixed] {
+        for bounding in [
+            BoundingKind::Ellipsoid,
+            BoundingKind::Obb,
+            BoundingKind::Mixed,
+        ] {
             let params = Params {
                 samples: 4_000,
                 k: Some(8),
@@ -42,7 +49,10 @@ fn every_shared_mesh_is_enclosed_with_every_bounding_kind() {
                 .filter(|&&p| !seg.parts.iter().any(|part| part.volume.contains(p)))
                 .count();
             let cov = 1.0 - missed as f64 / fine.len() as f64;
-            assert!(cov >= 0.9999, "{name:?} {bounding:?}: interior coverage {cov}");
+            assert!(
+                cov >= 0.9999,
+                "{name:?} {bounding:?}: interior coverage {cov}"
+            );
         }
     }
 }
