@@ -67,3 +67,38 @@ pub fn principal_box(
         radii: (0.5 * (hi - lo)).max(DVec3::splat(min_half)) * (1.0 + 1e-12),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bounding::mvee::mvee;
+    use crate::partition::Partition;
+    use crate::sampling::Grid;
+
+    #[test]
+    fn mvee_is_never_larger_than_the_scaled_legendre_ellipsoid() {
+        let shapes: [&dyn Fn(DVec3) -> bool; 3] = [
+            &|p: DVec3| p.length() <= 1.0,
+            &|p: DVec3| p.abs().max_element() <= 0.8 && p.x + p.y < 0.5,
+            &|p: DVec3| (p.x * p.x + 4.0 * p.y * p.y) <= 1.0 && p.z.abs() < 0.3 && p.x > -0.2,
+        ];
+        for inside in shapes {
+            let g = Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), 0.1, inside);
+            let solid = Solid::new(g);
+            let part = Partition::from_labels(&solid, vec![0; solid.len()], 1);
+            let pts = &solid.grid.points;
+            let leg = fast_volume(
+                &solid,
+                &part.parts[0],
+                Shape::Ellipsoid,
+                pts.iter().copied(),
+            );
+            let box_ = fast_volume(&solid, &part.parts[0], Shape::Obb, pts.iter().copied());
+            let e = mvee(pts, 1e-4, 0.05);
+            for &p in pts {
+                assert!(leg.contains(p) && box_.contains(p) && e.contains(p));
+            }
+            assert!(e.volume() <= leg.volume() * (1.0 + 1e-9));
+        }
+    }
+}
