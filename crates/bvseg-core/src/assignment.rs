@@ -75,6 +75,43 @@ impl PartMetric {
     }
 }
 
+/// For each sample in `samples`, the part of least cost among the candidates of its current
+/// part: `candidates[labels[s]]` (ties: the first listed). Listing, for each part, itself and
+/// the parts it touches confines the search to where a sample can go without leaving its
+/// part's neighbourhood, which is all a connected partition allows anyway.
+pub fn assign_local(
+    q: &[DVec3],
+    samples: &[u32],
+    labels: &[u32],
+    metrics: &[PartMetric],
+    candidates: &[Vec<u32>],
+    rule: Rule,
+) -> Vec<u32> {
+    let best = |&s: &u32| {
+        let x = q[s as usize];
+        let cands = &candidates[labels[s as usize] as usize];
+        let mut best = labels[s as usize];
+        let mut best_cost = f64::INFINITY;
+        for &j in cands {
+            let c = metrics[j as usize].cost(x, rule);
+            if c < best_cost {
+                best_cost = c;
+                best = j;
+            }
+        }
+        best
+    };
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        samples.par_iter().with_min_len(1024).map(best).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        samples.iter().map(best).collect()
+    }
+}
+
 /// For each sample in `samples`, the candidate part of least cost (ties: the lower index).
 pub fn assign(
     q: &[DVec3],

@@ -106,6 +106,7 @@ pub fn make_connected(
     // a part in scope is in scope).
     let mut piece = vec![NONE; labels.len()];
     let mut sizes: Vec<u32> = Vec::new();
+    let mut firsts: Vec<u32> = Vec::new();
     let mut stack = Vec::new();
     for &start in scope {
         if piece[start as usize] != NONE {
@@ -126,30 +127,29 @@ pub fn make_connected(
             }
         }
         sizes.push(size);
+        firsts.push(start);
     }
     // For each (part, solid component), its largest piece (the first one on ties).
     let mut best: std::collections::BTreeMap<(u32, u32), u32> = std::collections::BTreeMap::new();
-    let mut first_of_piece = vec![0u32; sizes.len()];
-    for &s in scope {
-        let p = piece[s as usize];
-        if first_of_piece[p as usize] != 0 {
-            continue;
-        }
-        first_of_piece[p as usize] = 1;
-        let key = (labels[s as usize], solid_components[s as usize]);
-        let e = best.entry(key).or_insert(p);
-        if sizes[p as usize] > sizes[*e as usize] {
-            *e = p;
+    for (p, &first) in firsts.iter().enumerate() {
+        let key = (labels[first as usize], solid_components[first as usize]);
+        let e = best.entry(key).or_insert(p as u32);
+        if sizes[p] > sizes[*e as usize] {
+            *e = p as u32;
         }
     }
     if best.len() == sizes.len() {
         return Vec::new();
     }
+    let mut keep = vec![false; sizes.len()];
+    for &p in best.values() {
+        keep[p as usize] = true;
+    }
     let mut orphans = Vec::new();
     let mut original = Vec::new();
     for &s in scope {
         let su = s as usize;
-        if best[&(labels[su], solid_components[su])] != piece[su] {
+        if !keep[piece[su] as usize] {
             original.push(labels[su]);
             labels[su] = NONE;
             orphans.push(s);

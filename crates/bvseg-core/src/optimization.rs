@@ -6,7 +6,7 @@
 //! 2. Boundary polish: single boundary samples move to a neighbouring part when the exact
 //!    change of F (from rank-one updated moments) is negative and the move keeps the part it
 //!    leaves connected, until no such move remains.
-use crate::assignment::{assign, PartMetric, Rule};
+use crate::assignment::{assign, assign_local, PartMetric, Rule};
 use crate::flooding::make_connected;
 use crate::partition::{Partition, Solid, CELL_VAR};
 use crate::sampling::NONE;
@@ -74,11 +74,32 @@ pub fn lloyd(
     let mut rule = Rule::Paper;
     // Previous label of each sample touched in the current sweep (NONE: untouched).
     let mut prev = vec![NONE; solid.len()];
-    for _ in 0..max_sweeps {
+    for sweep in 0..max_sweeps {
         let metrics: Vec<PartMetric> = part.parts.iter().map(PartMetric::new).collect();
-        let best = assign(&solid.q, &samples, &metrics, &candidates, rule);
+        // The first sweep looks at every candidate part; later ones only at the parts that
+        // touch a sample's own part (and itself), where a connected partition can move it.
+        // After the first sweeps, samples only change part near the boundaries between parts:
+        // re-assign the band of samples within two steps of one.
+        let (band, pairs) = if sweep >= 1 {
+            boundary_band(solid, &part.labels, &samples)
+        } else {
+            (samples.clone(), Vec::new())
+        };
+        let band = if sweep >= 2 { band } else { samples.clone() };
+        let best = if sweep == 0 || candidates.len() <= 4 {
+            assign(&solid.q, &band, &metrics, &candidates, rule)
+        } else {
+            let mut near: Vec<Vec<u32>> = (0..k as u32).map(|i| vec![i]).collect();
+            for (a, b) in pairs {
+                if is_active[a as usize] && is_active[b as usize] {
+                    near[a as usize].push(b);
+                    near[b as usize].push(a);
+                }
+            }
+            assign_local(&solid.q, &band, &part.labels, &metrics, &near, rule)
+        };
         let mut touched = Vec::new();
-        for (&s, &l) in samples.iter().zip(&best) {
+        for (&s, &l) in band.iter().zip(&best) {
             let su = s as usize;
             if part.labels[su] != l {
                 prev[su] = part.labels[su];
@@ -148,6 +169,50 @@ pub fn lloyd(
         }
     }
     kept
+}
+
+/// The samples of `scope` within two grid steps of a sample of another part (sorted), and
+/// the pairs of parts that touch there.
+fn boundary_band(solid: &Solid, labels: &[u32], scope: &[u32]) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let g = &solid.grid;
+    let mut mark = vec![false; labels.len()];
+    let mut band = Vec::new();
+    let mut pairs = Vec::new();
+    for &s in scope {
+        let l = labels[s as usize];
+        let mut boundary = false;
+        for &t in &g.neighbors[s as usize] {
+            if t != NONE && labels[t as usize] != l {
+                boundary = true;
+                let m = labels[t as usize];
+                pairs.push((l.min(m), l.max(m)));
+            }
+        }
+        if boundary {
+            mark[s as usize] = true;
+            band.push(s);
+        }
+    }
+    let mut start = 0;
+    for _ in 0..2 {
+        let end = band.len();
+        for i in start..end {
+            let s = band[i];
+            let l = labels[s as usize];
+            for &t in &g.neighbors[s as usize] {
+                // Rings stay within the scope: a neighbour in the same part is in it.
+                if t != NONE && !mark[t as usize] && labels[t as usize] == l {
+                    mark[t as usize] = true;
+                    band.push(t);
+                }
+            }
+        }
+        start = end;
+    }
+    band.sort_unstable();
+    pairs.sort_unstable();
+    pairs.dedup();
+    (band, pairs)
 }
 
 /// Whether removing sample `s` from `label` keeps that part connected, judged within the
