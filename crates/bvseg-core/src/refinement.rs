@@ -36,6 +36,10 @@ use crate::{
 /// Passes of the outside-volume tightening (see [`crate::tightening`]).
 pub const TIGHTEN_PASSES: usize = 12;
 
+/// Refinement steps without a better MOV (while only MOV is out of tolerance) after which
+/// refinement stops.
+pub const MOV_PATIENCE: usize = 6;
+
 /// How many parts a refinement step tries to split before keeping the first split anyway.
 pub const SPLIT_TRIES: usize = 4;
 
@@ -77,6 +81,9 @@ pub struct Segmenter {
     tries: Vec<usize>,
     first_try: Option<State>,
     refine_steps: usize,
+    /// Best MOV seen while only MOV was out of tolerance, and steps since it improved.
+    best_mov: f64,
+    stale: usize,
     history: Vec<Step>,
     result: Option<Segmentation>,
 }
@@ -108,6 +115,8 @@ impl Segmenter {
             tries: Vec::new(),
             first_try: None,
             refine_steps: 0,
+            best_mov: f64::INFINITY,
+            stale: 0,
             history: Vec::new(),
             result: None,
         })
@@ -245,6 +254,22 @@ impl Segmenter {
                 return None;
             }
             if cur.tov < self.params.tov {
+                // Only MOV is out of tolerance. Stop when it has not improved for a while:
+                // more parts would not fix it (see `merge_worst`), only add cost.
+                if cur.mov < self.best_mov {
+                    self.best_mov = cur.mov;
+                    self.stale = 0;
+                } else {
+                    self.stale += 1;
+                    if self.stale > MOV_PATIENCE {
+                        self.phase = if self.params.merge {
+                            Phase::Merge
+                        } else {
+                            Phase::Final
+                        };
+                        return None;
+                    }
+                }
                 if let Some(step) = self.merge_worst() {
                     return Some(step);
                 }
