@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::bounding::hull::hull_points;
-use crate::bounding::mvee::mvee;
+use crate::bounding::mvee::mvee_of_hull;
 use crate::bounding::obb::min_obb;
 use crate::enclosure::Enclosure;
 use crate::metrics::outside_cells;
@@ -75,14 +75,16 @@ impl Fitter {
         &self.enclosure
     }
 
-    /// Fit a volume of this fitter's kind to `points` (typically hull points).
+    /// Fit a volume of this fitter's kind to `points`, the vertices of a convex hull (from
+    /// [`hull_points`]): the ellipsoid fit does not compute their hull again. Any other point
+    /// set still gets a correct fit, only a slower one.
     pub fn fit_points(&self, solid: &Solid, points: &[DVec3]) -> BoundingVolume {
         let min_r = 0.5 * solid.grid.h;
         match self.kind {
-            BoundingKind::Ellipsoid => mvee(points, MVEE_TOL, min_r),
+            BoundingKind::Ellipsoid => mvee_of_hull(points, MVEE_TOL, min_r),
             BoundingKind::Obb => min_obb(points, min_r),
             BoundingKind::Mixed => {
-                let e = mvee(points, MVEE_TOL, min_r);
+                let e = mvee_of_hull(points, MVEE_TOL, min_r);
                 let b = min_obb(points, min_r);
                 if b.volume() < e.volume() {
                     b

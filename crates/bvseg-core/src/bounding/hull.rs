@@ -193,6 +193,10 @@ struct QuickHull<'a> {
     stamp: u32,
     /// Scratch for [`QuickHull::assign`].
     planes: Vec<(DVec3, DVec3, DVec3, f64)>,
+    /// Emptied conflict lists of deleted faces, for reuse.
+    pool: Vec<Vec<u32>>,
+    /// Per point, the stamp of the last apex whose horizon it was found on.
+    seen: Vec<u32>,
 }
 
 impl<'a> QuickHull<'a> {
@@ -203,6 +207,8 @@ impl<'a> QuickHull<'a> {
             faces: Vec::new(),
             stamp: 0,
             planes: Vec::new(),
+            pool: Vec::new(),
+            seen: vec![0; q.len()],
         }
     }
 
@@ -221,7 +227,7 @@ impl<'a> QuickHull<'a> {
             n,
             na,
             thr: self.eps * n.length(),
-            conflict: Vec::new(),
+            conflict: self.pool.pop().unwrap_or_default(),
             far: NONE,
             far_d: 0.0,
             mark: 0,
@@ -229,6 +235,15 @@ impl<'a> QuickHull<'a> {
             alive: true,
         });
         (self.faces.len() - 1) as u32
+    }
+
+    /// Priority of face `f` in [`QuickHull::expand`]: the distance of its farthest conflict
+    /// point (as ordered bits of a non-negative float), then its index, so that the order is
+    /// total and deterministic.
+    fn key(&self, f: u32) -> (u64, u32) {
+        let face = &self.faces[f as usize];
+        let d = face.far_d / face.n.length();
+        (d.max(0.0).to_bits(), f)
     }
 
     /// Exact test of `p` strictly above the plane of face `f`.
@@ -257,10 +272,16 @@ impl<'a> QuickHull<'a> {
                 p.x + p.y - p.z,
                 p.x - p.y + p.z,
                 -p.x + p.y + p.z,
+                p.x + p.y,
+                p.x - p.y,
+                p.y + p.z,
+                p.y - p.z,
+                p.z + p.x,
+                p.z - p.x,
             ]
         };
-        let mut lo = [(f64::INFINITY, 0usize); 7];
-        let mut hi = [(f64::NEG_INFINITY, 0usize); 7];
+        let mut lo = [(f64::INFINITY, 0usize); 13];
+        let mut hi = [(f64::NEG_INFINITY, 0usize); 13];
         for (i, p) in q.iter().enumerate() {
             for (k, t) in key(p).into_iter().enumerate() {
                 if t < lo[k].0 {
@@ -350,14 +371,10 @@ impl<'a> QuickHull<'a> {
                 }
             }
         }
-        // First the hull of the extremes and of a regular subsample: a polytope that already
-        // holds most points, which one cheap pass then discards.
+        // First the hull of the extremes (all of them hull vertices): a polytope that already
+        // holds many points, which one cheap pass then discards.
         let n = q.len();
-        let m = sub_sample_size(n);
         let mut first: Vec<u32> = ext.iter().map(|&i| i as u32).collect();
-        first.extend((0..m).map(|k| (k * n / m) as u32));
-        first.sort_unstable();
-        first.dedup();
         first.retain(|p| !s.contains(p));
         self.assign(&first, &f);
         self.expand(f.iter().rev().copied().collect())?;
@@ -419,7 +436,7 @@ impl<'a> QuickHull<'a> {
                 let face = &self.faces[f as usize];
                 let err = ORIENT_ERR * face.na.dot(d.abs());
                 if h - err > thr {
-                    outside = Some(f);
+                    outside = Some((f, h));
                     break;
                 }
                 if h + err >= 0.0 {
@@ -430,7 +447,7 @@ impl<'a> QuickHull<'a> {
             // below all of them means inside; a point clearly above one is handed to it, and
             // the rare point in between gets the full test.
             match outside {
-                Some(f) => self.push_conflict(f, p, x),
+                Some((f, h)) => self.push_conflict(f, p, x, h),
                 None if !below => unsure.push(p),
                 None => {}
             }
@@ -445,15 +462,21 @@ impl<'a> QuickHull<'a> {
         self.expand(todo)
     }
 
-    /// Quickhull proper: adds conflict points as apexes until no face has any.
-    fn expand(&mut self, mut todo: Vec<u32>) -> Option<()> {
+    /// Quickhull proper: adds conflict points as apexes until no face has any. The farthest
+    /// apex overall goes first (rather than depth first from the newest faces): fewer apexes
+    /// are later buried by farther ones, which saves most of the work on lattice inputs.
+    fn expand(&mut self, todo0: Vec<u32>) -> Option<()> {
+        let mut todo = std::collections::BinaryHeap::new();
+        for f in todo0 {
+            todo.push(self.key(f));
+        }
         let mut visible: Vec<u32> = Vec::new();
         // Horizon edges `(u, v, face outside)`.
         let mut horizon: Vec<(u32, u32, u32)> = Vec::new();
         let mut stack: Vec<(u32, usize, usize, usize)> = Vec::new();
         let mut orphans: Vec<u32> = Vec::new();
         let mut new_faces: Vec<u32> = Vec::new();
-        while let Some(f0) = todo.pop() {
+        while let Some((_, f0)) = todo.pop() {
             let face = &self.faces[f0 as usize];
             if !face.alive || face.conflict.is_empty() {
                 continue;
@@ -504,10 +527,14 @@ impl<'a> QuickHull<'a> {
             // but a broken mesh must never propagate.
             let ok = horizon.len() >= 3
                 && (0..horizon.len()).all(|k| horizon[k].1 == horizon[(k + 1) % horizon.len()].0);
-            let mut starts: Vec<u32> = horizon.iter().map(|h| h.0).collect();
-            starts.sort_unstable();
-            starts.dedup();
-            if !ok || starts.len() != horizon.len() {
+            // Each horizon vertex once (the loop is simple).
+            let simple = horizon.iter().all(|h| {
+                let s = &mut self.seen[h.0 as usize];
+                let fresh = *s != stamp;
+                *s = stamp;
+                fresh
+            });
+            if !ok || !simple {
                 return None;
             }
             new_faces.clear();
@@ -529,24 +556,25 @@ impl<'a> QuickHull<'a> {
                 let face = &mut self.faces[g as usize];
                 face.alive = false;
                 orphans.extend(face.conflict.drain(..).filter(|&p| p != apex));
-                face.conflict = Vec::new();
+                let list = std::mem::take(&mut face.conflict);
+                self.pool.push(list);
             }
             let nf = std::mem::take(&mut new_faces);
             self.assign(&orphans, &nf);
-            todo.extend(
-                nf.iter()
-                    .filter(|&&x| !self.faces[x as usize].conflict.is_empty()),
-            );
+            for &x in &nf {
+                if !self.faces[x as usize].conflict.is_empty() {
+                    todo.push(self.key(x));
+                }
+            }
             new_faces = nf;
         }
         Some(())
     }
 
     /// Adds `p` (at `x`) to the conflict list of face `f`, which it is above by more than
-    /// `eps`, keeping track of the farthest such point.
-    fn push_conflict(&mut self, f: u32, p: u32, x: DVec3) {
+    /// `eps` (its height `h = n . (x - v0)`), keeping track of the farthest such point.
+    fn push_conflict(&mut self, f: u32, p: u32, x: DVec3, h: f64) {
         let face = &self.faces[f as usize];
-        let h = face.n.dot(x - self.q[face.v[0] as usize]);
         let thr = face.thr;
         // The next apex is the farthest point, but among points equally far up to `eps` (a
         // lattice row parallel to the face) the one farthest from the face: a corner of that
@@ -590,21 +618,16 @@ impl<'a> QuickHull<'a> {
                 // A lower bound on the exact height: its rounding error scales with the
                 // permanent `na`, not with `|n|`, so on a sliver face it can exceed `eps * |n|`
                 // and a point below the sliver would otherwise become an apex.
-                let h = n.dot(d) - ORIENT_ERR * na.dot(d.abs());
-                if h <= thr {
+                let h = n.dot(d);
+                if h - ORIENT_ERR * na.dot(d.abs()) <= thr {
                     continue;
                 }
-                self.push_conflict(faces[k], p, x);
+                self.push_conflict(faces[k], p, x, h);
                 break;
             }
         }
         self.planes = planes;
     }
-}
-
-/// How many regularly spaced points go into the first polytope, with the extremes.
-fn sub_sample_size(n: usize) -> usize {
-    ((n as f64).sqrt() * 2.0) as usize
 }
 
 /// An ellipsoid inside a polytope: centred at `c`, shaped like the covariance of the polytope's
@@ -662,81 +685,101 @@ impl InnerEllipsoid {
 }
 
 /// For rays from a point `c` strictly inside a polytope: a cube map of directions whose cells
-/// list every face the ray may leave through. A face is listed in a cell when its central
-/// projection on the unit sphere meets the cell's bounding cap, which is conservative; the
-/// cells of a face are found by a flood fill from the one holding its centre.
+/// list every face the ray may leave through. Seen from `c`, a face covers a convex cone of
+/// directions; within one side of the cube that cone is the face clipped to the side's cone,
+/// and its central projection on the side's plane is the convex polygon of the clipped
+/// corners' projections. The face is listed in every cell of that polygon's bounding box,
+/// widened by a margin far above rounding, which is conservative.
 struct DirMap {
     g: usize,
     start: Vec<u32>,
     list: Vec<u32>,
-    /// Faces seen from `c` under 90 degrees or more: listed for every direction.
+    /// Faces too close to `c` to project reliably: listed for every direction.
     global: Vec<u32>,
 }
 
 impl DirMap {
-    fn new(c: DVec3, faces: impl Iterator<Item = [DVec3; 3]>) -> Self {
-        let tris: Vec<SphTri> = faces.map(|t| SphTri::new(t.map(|v| v - c))).collect();
-        // Cells a few times smaller than the faces, so that few caps overlap each.
-        let g = ((tris.len() as f64 / 6.0).sqrt() * 2.0)
+    /// Relative widening of the side cones and of the projected boxes.
+    const MARGIN: f64 = 1e-7;
+
+    fn new(c: DVec3, faces: impl ExactSizeIterator<Item = [DVec3; 3]>) -> Self {
+        // Cells about as many as the faces, so that few faces are listed in each.
+        let g = ((faces.len() as f64 / 6.0).sqrt() * 2.0)
             .ceil()
             .clamp(1.0, 32.0) as usize;
         let ncell = 6 * g * g;
-        let mut cells = Vec::with_capacity(ncell);
-        let mut nbrs = Vec::with_capacity(ncell);
-        for side in 0..6 {
-            for i in 0..g {
-                for j in 0..g {
-                    let at = |fu: f64, fv: f64| Self::dir(g, side, i as f64 + fu, j as f64 + fv);
-                    let ctr = at(0.5, 0.5);
-                    let r = [at(0.0, 0.0), at(1.0, 0.0), at(0.0, 1.0), at(1.0, 1.0)]
-                        .iter()
-                        .map(|x| x.dot(ctr))
-                        .fold(1.0f64, f64::min)
-                        .min(1.0)
-                        .acos();
-                    cells.push((ctr, r));
-                    // Off the side's edge the direction lands on the neighbouring side.
-                    nbrs.push(
-                        [(-0.5, 0.5), (1.5, 0.5), (0.5, -0.5), (0.5, 1.5)]
-                            .map(|(u, v)| Self::cell_of(g, at(u, v)) as u32),
-                    );
-                }
-            }
-        }
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); ncell];
+        let gh = 0.5 * g as f64;
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
         let mut global = Vec::new();
-        let mut seen = vec![u32::MAX; ncell];
-        let mut queue = Vec::new();
-        for (k, t) in tris.iter().enumerate() {
-            let Some(fc) = t.centre else {
+        for (k, t) in faces.enumerate() {
+            let t = t.map(|v| v - c);
+            // A face whose plane passes (nearly) through `c` would project to infinity.
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            let scale = t.iter().map(|v| v.length()).fold(0.0f64, f64::max);
+            let dist = n.dot(t[0]);
+            if !(dist.abs() > 1e-6 * n.length() * scale) {
                 global.push(k as u32);
                 continue;
-            };
-            let c0 = Self::cell_of(g, fc);
-            queue.clear();
-            queue.push(c0 as u32);
-            seen[c0] = k as u32;
-            while let Some(x) = queue.pop() {
-                let (cc, cr) = cells[x as usize];
-                if !t.meets_cap(cc, cr) {
+            }
+            // A triangle whose corners are well inside one side's cone stays in it (the cone
+            // is convex); any other is clipped to each side's slightly widened cone.
+            let sides = t.map(Self::side_of);
+            let one = (sides[0].is_some() && sides[0] == sides[1] && sides[1] == sides[2])
+                .then_some(sides[0])
+                .flatten();
+            for side in 0..6 {
+                let mut poly = [DVec3::ZERO; 8];
+                let len = match one {
+                    Some(s) if s == side => {
+                        poly[..3].copy_from_slice(&t);
+                        3
+                    }
+                    Some(_) => 0,
+                    None => Self::clip(&t, side, &mut poly),
+                };
+                if len == 0 {
                     continue;
                 }
-                lists[x as usize].push(k as u32);
-                for y in nbrs[x as usize] {
-                    if seen[y as usize] != k as u32 {
-                        seen[y as usize] = k as u32;
-                        queue.push(y);
+                let (m, sg) = (side / 2, if side & 1 == 0 { 1.0 } else { -1.0 });
+                let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+                for p in &poly[..len] {
+                    let w = sg * p[m];
+                    for (a, ax) in [(m + 1) % 3, (m + 2) % 3].into_iter().enumerate() {
+                        let u = p[ax] / w;
+                        lo[a] = lo[a].min(u);
+                        hi[a] = hi[a].max(u);
+                    }
+                }
+                if !(lo.iter().chain(&hi).all(|x| x.is_finite())) {
+                    global.push(k as u32);
+                    break;
+                }
+                let cell = |u: f64| ((u + 1.0) * gh).clamp(0.0, (g - 1) as f64) as usize;
+                let (i0, i1) = (cell(lo[0] - Self::MARGIN), cell(hi[0] + Self::MARGIN));
+                let (j0, j1) = (cell(lo[1] - Self::MARGIN), cell(hi[1] + Self::MARGIN));
+                for i in i0..=i1 {
+                    for j in j0..=j1 {
+                        pairs.push((((side * g + i) * g + j) as u32, k as u32));
                     }
                 }
             }
         }
-        let mut start = Vec::with_capacity(ncell + 1);
-        let mut list = Vec::new();
-        for l in &lists {
-            start.push(list.len() as u32);
-            list.extend_from_slice(l);
+        // Bucket by cell (a stable counting sort keeps each cell's faces in face order).
+        let mut start = vec![0u32; ncell + 1];
+        for &(cell, _) in &pairs {
+            start[cell as usize + 1] += 1;
         }
-        start.push(list.len() as u32);
+        for i in 0..ncell {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![0u32; pairs.len()];
+        for &(cell, f) in &pairs {
+            list[fill[cell as usize] as usize] = f;
+            fill[cell as usize] += 1;
+        }
+        global.sort_unstable();
+        global.dedup();
         Self {
             g,
             start,
@@ -745,14 +788,57 @@ impl DirMap {
         }
     }
 
-    /// Unit direction at cell coordinates `(u, v)` (in `0..=g` on the side) of cube side `side`.
-    fn dir(g: usize, side: usize, u: f64, v: f64) -> DVec3 {
-        let m = side / 2;
-        let mut d = DVec3::ZERO;
-        d[m] = if side & 1 == 0 { 1.0 } else { -1.0 };
-        d[(m + 1) % 3] = 2.0 * u / g as f64 - 1.0;
-        d[(m + 2) % 3] = 2.0 * v / g as f64 - 1.0;
-        d.normalize()
+    /// The cube side whose (widened) cone alone holds direction `d`, if exactly one does.
+    fn side_of(d: DVec3) -> Option<usize> {
+        let a = d.abs();
+        let m = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let (b, c) = (a[(m + 1) % 3], a[(m + 2) % 3]);
+        // Near a side's edge, the widened cones of both sides hold it.
+        (b < a[m] * (1.0 - 4.0 * Self::MARGIN) && c < a[m] * (1.0 - 4.0 * Self::MARGIN))
+            .then_some(2 * m + usize::from(d[m] < 0.0))
+    }
+
+    /// Clips triangle `t` to the cone of cube side `side`, widened by `MARGIN`: the polygon's
+    /// length in `out`.
+    fn clip(t: &[DVec3; 3], side: usize, out: &mut [DVec3; 8]) -> usize {
+        let (m, sg) = (side / 2, if side & 1 == 0 { 1.0 } else { -1.0 });
+        let mut cur = [DVec3::ZERO; 8];
+        cur[..3].copy_from_slice(t);
+        let mut n = 3;
+        for (ax, s) in [
+            ((m + 1) % 3, 1.0),
+            ((m + 1) % 3, -1.0),
+            ((m + 2) % 3, 1.0),
+            ((m + 2) % 3, -1.0),
+        ] {
+            // Keep sg * p[m] * (1 + MARGIN) - s * p[ax] >= 0.
+            let f = |p: &DVec3| sg * p[m] * (1.0 + Self::MARGIN) - s * p[ax];
+            let mut k = 0;
+            for i in 0..n {
+                let (p, q) = (cur[i], cur[(i + 1) % n]);
+                let (fp, fq) = (f(&p), f(&q));
+                if fp >= 0.0 {
+                    out[k] = p;
+                    k += 1;
+                }
+                if (fp >= 0.0) != (fq >= 0.0) && k < 8 {
+                    out[k] = p + (q - p) * (fp / (fp - fq));
+                    k += 1;
+                }
+            }
+            n = k;
+            if n == 0 {
+                return 0;
+            }
+            cur[..n].copy_from_slice(&out[..n]);
+        }
+        n
     }
 
     #[inline]
@@ -782,55 +868,6 @@ impl DirMap {
         let cell = Self::cell_of(self.g, d);
         let l = &self.list[self.start[cell] as usize..self.start[cell + 1] as usize];
         self.global.iter().chain(l)
-    }
-}
-
-/// The central projection of a triangle on the unit sphere, from an origin not in its plane.
-struct SphTri {
-    v: [DVec3; 3],
-    /// Unit normals of the planes through the origin and each edge, pointing inwards.
-    e: [DVec3; 3],
-    /// A direction inside it; `None` when it is degenerate, so it must be listed everywhere.
-    centre: Option<DVec3>,
-}
-
-impl SphTri {
-    fn new(t: [DVec3; 3]) -> Self {
-        let v = t.map(|x| x.normalize_or_zero());
-        let s = v[0].cross(v[1]).dot(v[2]).signum();
-        let e = [0, 1, 2].map(|k| (v[k].cross(v[(k + 1) % 3]) * s).normalize_or_zero());
-        let centre = (v[0] + v[1] + v[2]).normalize_or_zero();
-        let ok = e.iter().chain(&v).all(|x| *x != DVec3::ZERO) && centre != DVec3::ZERO;
-        Self {
-            v,
-            e,
-            centre: ok.then_some(centre),
-        }
-    }
-
-    /// Whether the spherical cap of centre `x` (unit) and angular radius `r` may meet the
-    /// triangle: it holds `x`, or an edge arc comes within `r` of it. Margins absorb rounding.
-    fn meets_cap(&self, x: DVec3, r: f64) -> bool {
-        const MARGIN: f64 = 1e-7;
-        if self.e.iter().all(|n| n.dot(x) >= -1e-12) {
-            return true;
-        }
-        for k in 0..3 {
-            let (a, b, n) = (self.v[k], self.v[(k + 1) % 3], self.e[k]);
-            let h = n.dot(x);
-            let p = x - n * h;
-            // The closest point of the great circle lies on the arc: distance to the circle.
-            let ab = a.cross(b);
-            let d = if ab.dot(a.cross(p)) >= 0.0 && ab.dot(p.cross(b)) >= 0.0 {
-                h.abs().min(1.0).asin()
-            } else {
-                x.dot(a).max(x.dot(b)).clamp(-1.0, 1.0).acos()
-            };
-            if d <= r + MARGIN {
-                return true;
-            }
-        }
-        false
     }
 }
 

@@ -38,6 +38,30 @@ use crate::volume::{BoundingVolume, Shape};
 /// origin. Never panics; the radii are at least `min_radius` (a non-positive or non-finite
 /// `min_radius` counts as `1e-12`) and finite for any input whose extent is.
 pub fn mvee(points: &[DVec3], tol: f64, min_radius: f64) -> BoundingVolume {
+    let hull = convex_hull(points);
+    fit(&hull.vertices, points, tol, min_radius)
+}
+
+/// [`mvee`] of points already known to be in convex position, typically the vertices of a
+/// convex hull (from [`super::hull::hull_points`]): the same fit without computing their hull
+/// again. Points inside the hull of the others are allowed (they only cost time), so any
+/// point set gives a correct, if slower, result; non-finite points are ignored.
+pub fn mvee_of_hull(hull_vertices: &[DVec3], tol: f64, min_radius: f64) -> BoundingVolume {
+    if hull_vertices.iter().all(|p| p.is_finite()) {
+        fit(hull_vertices, hull_vertices, tol, min_radius)
+    } else {
+        let v: Vec<DVec3> = hull_vertices
+            .iter()
+            .copied()
+            .filter(|p| p.is_finite())
+            .collect();
+        fit(&v, &v, tol, min_radius)
+    }
+}
+
+/// The fit of [`mvee`] to the finite points `v` (hull vertices), scaled to hold every finite
+/// point of `points` too.
+fn fit(v: &[DVec3], points: &[DVec3], tol: f64, min_radius: f64) -> BoundingVolume {
     let min_r = if min_radius.is_finite() && min_radius > 0.0 {
         min_radius
     } else {
@@ -49,8 +73,6 @@ pub fn mvee(points: &[DVec3], tol: f64, min_radius: f64) -> BoundingVolume {
         1e-3
     };
     let finite = || points.iter().copied().filter(|p| p.is_finite());
-    let hull = convex_hull(points);
-    let v = &hull.vertices;
     let sphere = |c: DVec3| BoundingVolume {
         shape: Shape::Ellipsoid,
         center: c,
