@@ -177,31 +177,40 @@ impl Enclosure {
 /// through them. Any other point lies strictly between two points of the set, so it cannot be
 /// a vertex of their convex hull: this is a cheap, exact prefilter for the hull.
 fn extreme_on_every_line(lat: &[[i64; 3]]) -> Vec<[i64; 3]> {
-    let mut keep = vec![true; lat.len()];
+    let mut pts: Vec<[i64; 3]> = lat.to_vec();
+    pts.sort_unstable();
+    pts.dedup();
+    let mut keep = vec![true; pts.len()];
+    let mut order: Vec<u32> = (0..pts.len() as u32).collect();
     for axis in 0..3 {
         let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let mut ends: std::collections::HashMap<(i64, i64), (i64, i64)> =
-            std::collections::HashMap::with_capacity(lat.len());
-        for p in lat {
-            let e = ends.entry((p[u], p[v])).or_insert((p[axis], p[axis]));
-            e.0 = e.0.min(p[axis]);
-            e.1 = e.1.max(p[axis]);
-        }
-        for (i, p) in lat.iter().enumerate() {
-            let (lo, hi) = ends[&(p[u], p[v])];
-            if p[axis] != lo && p[axis] != hi {
-                keep[i] = false;
+        let key = |i: u32| {
+            let p = pts[i as usize];
+            (p[u], p[v], p[axis])
+        };
+        order.sort_unstable_by_key(|&i| key(i));
+        // Within each line (equal u, v), only the first and the last point may stay.
+        let mut start = 0;
+        while start < order.len() {
+            let (lu, lv, _) = key(order[start]);
+            let mut end = start + 1;
+            while end < order.len() {
+                let (eu, ev, _) = key(order[end]);
+                if eu != lu || ev != lv {
+                    break;
+                }
+                end += 1;
             }
+            for &i in &order[start + 1..end.saturating_sub(1).max(start + 1)] {
+                keep[i as usize] = false;
+            }
+            start = end;
         }
     }
-    let mut out: Vec<[i64; 3]> = lat
-        .iter()
+    pts.into_iter()
         .zip(keep)
-        .filter_map(|(p, k)| k.then_some(*p))
-        .collect();
-    out.sort_unstable();
-    out.dedup();
-    out
+        .filter_map(|(p, k)| k.then_some(p))
+        .collect()
 }
 
 /// For each triangle, the sample nearest its centroid (among the grid-nearest samples of the
