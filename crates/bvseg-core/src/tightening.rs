@@ -17,6 +17,13 @@ use crate::partition::{Partition, Solid};
 use crate::sampling::NONE;
 use crate::Mesh;
 
+/// Largest gauge (1 = on the surface) that a moved layer may have in the receiving part's
+/// current volume for the move to be tried.
+const REACH: f64 = 1.15;
+
+/// A pass that lowers TOV by less than this ends the tightening.
+const MIN_PASS_GAIN: f64 = 1e-3;
+
 /// How many lattice cells outside the solid each cell is covered by, and how many are
 /// covered at all.
 #[derive(Debug, Clone)]
@@ -198,6 +205,16 @@ pub fn tighten(
             if 2 * layer.len() > n_from || n_from - layer.len() < min_part {
                 continue;
             }
+            // A layer that sticks far out of the receiving part's volume would make it grow
+            // more than the giving part can shrink: not worth a refit.
+            let to_volume = &fits[b as usize].volume;
+            let reach = layer
+                .iter()
+                .map(|&s| to_volume.gauge(g.points[s as usize]))
+                .fold(0.0f64, f64::max);
+            if reach > REACH {
+                continue;
+            }
             let mut m_from = part.parts[a as usize];
             let mut m_to = part.parts[b as usize];
             for &s in &layer {
@@ -263,6 +280,7 @@ pub fn tighten(
         scored.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
         let mut touched = vec![false; part.k()];
         let mut applied = 0;
+        let union_before = cov.union;
         for (_, i) in scored {
             let mv = &cands[i];
             let (a, b) = (mv.from as usize, mv.to as usize);
@@ -302,7 +320,9 @@ pub fn tighten(
             applied += 1;
         }
         moves += applied;
-        if applied == 0 {
+        // Stop when a pass gains less than MIN_PASS_GAIN of the solid's volume in TOV.
+        let gain = union_before.saturating_sub(cov.union) as f64 / solid.len() as f64;
+        if applied == 0 || gain < MIN_PASS_GAIN {
             break;
         }
     }
