@@ -523,11 +523,37 @@ fn barrier<const N: usize, const K: usize>(
         .try_into()
         .ok()?;
     // Stored by column, so that the sums over points below are plain dot products.
-    let phi: [Vec<f64>; K] = std::array::from_fn(|p| {
+    let mut phi: [Vec<f64>; K] = std::array::from_fn(|p| {
         let (a, b) = pairs[p];
         let f = if a == b { 1.0 } else { 2.0 };
         q.iter().map(|x| f * x[a] * x[b]).collect()
     });
+    // The data part of the Hessian, sum c_i phi_p(q_i) phi_r(q_i), only involves the
+    // `C(N + 3, 4)` distinct monomials of degree 4 in the lifted coordinates: one weighted sum
+    // per monomial instead of one per entry. `quartic[p][r]` is the monomial of entry (p, r).
+    let mut monos: Vec<[usize; 4]> = Vec::new();
+    for a in 0..N {
+        for b in a..N {
+            for c in b..N {
+                for e in c..N {
+                    monos.push([a, b, c, e]);
+                }
+            }
+        }
+    }
+    let mut mono: Vec<Vec<f64>> = monos
+        .iter()
+        .map(|&[a, b, c, e]| q.iter().map(|x| x[a] * x[b] * x[c] * x[e]).collect())
+        .collect();
+    let quartic: [[usize; K]; K] = std::array::from_fn(|p| {
+        std::array::from_fn(|r| {
+            let mut k = [pairs[p].0, pairs[p].1, pairs[r].0, pairs[r].1];
+            k.sort_unstable();
+            monos.iter().position(|&m| m == k).unwrap_or(0)
+        })
+    });
+    let pair_f: [f64; K] = pairs.map(|(a, b)| if a == b { 1.0 } else { 2.0 });
+    let mut moment = vec![0.0; monos.len()];
     let to_mat = |h: &[f64; K]| {
         let mut m = [[0.0; N]; N];
         for (p, &(a, b)) in pairs.iter().enumerate() {
@@ -555,13 +581,14 @@ fn barrier<const N: usize, const K: usize>(
         let (a, b) = pairs[p];
         ([(a, b), (b, a)], if a == b { 1 } else { 2 })
     };
-    let m = q.len() as f64;
+    let mut m = q.len() as f64;
+    // Input index of each point still in the problem.
+    let mut act: Vec<usize> = (0..q.len()).collect();
     let mut t = 10.0 * m;
     let mut s = vec![0.0; q.len()];
     let mut r = vec![0.0; q.len()];
     let mut c = vec![0.0; q.len()];
     let mut d = vec![0.0; q.len()];
-    let mut tmp = vec![0.0; q.len()];
     for _outer in 0..30 {
         for _newton in 0..50 {
             let wm = invert(to_mat(&h))?;
@@ -577,13 +604,13 @@ fn barrier<const N: usize, const K: usize>(
             }
             let mut g = [0.0; K];
             let mut hess = [[0.0; K]; K];
+            for (mk, col) in moment.iter_mut().zip(&mono) {
+                *mk = dot(&c, col);
+            }
             for p in 0..K {
                 g[p] = dot(&r, &phi[p]);
-                for (ti, (ci, f)) in tmp.iter_mut().zip(c.iter().zip(&phi[p])) {
-                    *ti = ci * f;
-                }
                 for qq in 0..=p {
-                    hess[p][qq] = dot(&tmp, &phi[qq]);
+                    hess[p][qq] = pair_f[p] * pair_f[qq] * moment[quartic[p][qq]];
                 }
             }
             for p in 0..K {
@@ -623,12 +650,24 @@ fn barrier<const N: usize, const K: usize>(
                     return f64::INFINITY;
                 };
                 let mut f = -t * ld;
-                for (si, di) in s.iter().zip(&d) {
-                    let slack = 1.0 - si + a * di;
-                    if slack <= 0.0 {
-                        return f64::INFINITY;
+                // Sum of logs as logs of products of 8 (slacks are at most about 1 and at
+                // least 1e-38 or so in practice; a product out of range takes the slow way).
+                for (sc, dc) in s.chunks(8).zip(d.chunks(8)) {
+                    let mut prod = 1.0;
+                    for (si, di) in sc.iter().zip(dc) {
+                        let slack = 1.0 - si + a * di;
+                        if slack.is_nan() || slack <= 0.0 {
+                            return f64::INFINITY;
+                        }
+                        prod *= slack;
                     }
-                    f -= slack.ln();
+                    if prod.is_normal() && prod < 1e300 {
+                        f -= prod.ln();
+                    } else {
+                        for (si, di) in sc.iter().zip(dc) {
+                            f -= (1.0 - si + a * di).ln();
+                        }
+                    }
                 }
                 f
             };
@@ -649,11 +688,79 @@ fn barrier<const N: usize, const K: usize>(
         if m / t <= gap {
             break;
         }
+        // Points that cannot support the optimal weights (Harman and Pronzato's bound on
+        // their `omega` under the dual weights of the central point) leave the problem: the
+        // optimum is unchanged, every later step is cheaper, and the duality gap bound
+        // `m / t` shrinks with `m`.
+        let keep = support_candidates::<N>(q, &act, &r);
+        let kept = keep.iter().filter(|&&k| k).count();
+        if kept < act.len() && kept >= N {
+            let compact = |v: &mut Vec<f64>| {
+                let mut j = 0;
+                for i in 0..keep.len() {
+                    if keep[i] {
+                        v[j] = v[i];
+                        j += 1;
+                    }
+                }
+                v.truncate(j);
+            };
+            for v in phi.iter_mut().chain(mono.iter_mut()) {
+                compact(v);
+            }
+            for v in [&mut s, &mut r, &mut c, &mut d] {
+                compact(v);
+            }
+            let mut j = 0;
+            for i in 0..keep.len() {
+                if keep[i] {
+                    act[j] = act[i];
+                    j += 1;
+                }
+            }
+            act.truncate(j);
+            m = act.len() as f64;
+        }
         t *= 20.0;
     }
     // On the central path, t H^-1 = sum q q^T / (1 - s): those are the dual weights.
     let total: f64 = r.iter().sum();
-    (total > 0.0 && total.is_finite()).then(|| r.iter().map(|x| x / total).collect())
+    let mut u = vec![0.0; q.len()];
+    for (&i, &ri) in act.iter().zip(&r) {
+        u[i] = ri / total;
+    }
+    (total > 0.0 && total.is_finite()).then_some(u)
+}
+
+/// Which of the points `q[act]` may still support the optimal weights, given positive weights
+/// proportional to `r`: the others' `omega` is below the bound of Harman and Pronzato (2007),
+/// `N (1 + e/2 - sqrt(e (4 + e - 4/N)) / 2)` with `N + e` the largest `omega`. All points
+/// are kept if the moment matrix is singular.
+fn support_candidates<const N: usize>(q: &[[f64; N]], act: &[usize], r: &[f64]) -> Vec<bool> {
+    let total: f64 = r.iter().sum();
+    let mut mu = [[0.0; N]; N];
+    for (&i, &ri) in act.iter().zip(r) {
+        let x = &q[i];
+        let w = ri / total;
+        for a in 0..N {
+            for b in 0..N {
+                mu[a][b] += w * x[a] * x[b];
+            }
+        }
+    }
+    let Some(mi) = invert(mu) else {
+        return vec![true; act.len()];
+    };
+    let om: Vec<f64> = act.iter().map(|&i| quad(&mi, &q[i])).collect();
+    let n = N as f64;
+    let e = om.iter().fold(0.0f64, |a, &b| a.max(b)) - n;
+    if !(e.is_finite() && e >= 0.0) {
+        return vec![true; act.len()];
+    }
+    // A relative margin far above the rounding of `omega`.
+    let bound =
+        n * (1.0 + e / 2.0 - (e * (4.0 + e - 4.0 / n)).max(0.0).sqrt() / 2.0) * (1.0 - 1e-9);
+    om.iter().map(|&o| o >= bound).collect()
 }
 
 /// Solves `A x = b` for a symmetric positive definite `A` given by its lower triangle
