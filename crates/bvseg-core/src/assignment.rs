@@ -101,15 +101,7 @@ pub fn assign_local(
         }
         best
     };
-    #[cfg(feature = "parallel")]
-    {
-        use rayon::prelude::*;
-        samples.par_iter().with_min_len(1024).map(best).collect()
-    }
-    #[cfg(not(feature = "parallel"))]
-    {
-        samples.iter().map(best).collect()
-    }
+    crate::parallel::map_chunked(samples, 1024, best)
 }
 
 /// For each sample in `samples`, the candidate part of least cost (ties: the lower index).
@@ -133,15 +125,7 @@ pub fn assign(
         }
         best
     };
-    #[cfg(feature = "parallel")]
-    {
-        use rayon::prelude::*;
-        samples.par_iter().with_min_len(1024).map(best).collect()
-    }
-    #[cfg(not(feature = "parallel"))]
-    {
-        samples.iter().map(best).collect()
-    }
+    crate::parallel::map_chunked(samples, 1024, best)
 }
 
 #[cfg(test)]

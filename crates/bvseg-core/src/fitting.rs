@@ -135,17 +135,7 @@ impl Fitter {
                     .points(mesh, solid, labels, &members[i], i as u32);
                 self.make(solid, &pts)
             };
-            let new: Vec<Fit> = {
-                #[cfg(feature = "parallel")]
-                {
-                    use rayon::prelude::*;
-                    missing.par_iter().map(one).collect()
-                }
-                #[cfg(not(feature = "parallel"))]
-                {
-                    missing.iter().map(one).collect()
-                }
-            };
+            let new: Vec<Fit> = crate::parallel::map(&missing, one);
             for (&i, f) in missing.iter().zip(new) {
                 self.cache.insert(keys[i], Arc::new(f));
             }
@@ -162,17 +152,7 @@ impl Fitter {
             .filter(|(k, _)| !self.cache.contains_key(k))
             .collect();
         let one = |(k, p): &(FitKey, Vec<DVec3>)| (*k, self.make(solid, p));
-        let new: Vec<(FitKey, Fit)> = {
-            #[cfg(feature = "parallel")]
-            {
-                use rayon::prelude::*;
-                todo.par_iter().map(one).collect()
-            }
-            #[cfg(not(feature = "parallel"))]
-            {
-                todo.iter().map(one).collect()
-            }
-        };
+        let new: Vec<(FitKey, Fit)> = crate::parallel::map(&todo, one);
         for (k, f) in new {
             self.cache.entry(k).or_insert_with(|| Arc::new(f));
         }

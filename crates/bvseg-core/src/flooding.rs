@@ -10,22 +10,28 @@ use std::collections::BinaryHeap;
 
 use crate::sampling::{Grid, NONE};
 
-/// Connected pieces of the labelling: for each sample, the id of its piece (pieces are
-/// numbered in order of their first sample), and the size of each piece.
-pub fn pieces(grid: &Grid, labels: &[u32]) -> (Vec<u32>, Vec<u32>) {
-    let n = labels.len();
-    let mut piece = vec![NONE; n];
+/// Connected pieces of the labelling among the samples of `scope`: for each sample, the id of
+/// its piece (pieces are numbered in order of their first sample in `scope`; [`NONE`] outside
+/// the scope), the size of each piece, and its first sample. A piece never leaves its part,
+/// so `scope` must hold every sample of each part it touches.
+pub fn pieces_in(
+    grid: &Grid,
+    labels: &[u32],
+    scope: impl IntoIterator<Item = u32>,
+) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let mut piece = vec![NONE; labels.len()];
     let mut sizes = Vec::new();
+    let mut firsts = Vec::new();
     let mut stack = Vec::new();
-    for start in 0..n {
-        if piece[start] != NONE {
+    for start in scope {
+        if piece[start as usize] != NONE {
             continue;
         }
         let id = sizes.len() as u32;
-        let l = labels[start];
+        let l = labels[start as usize];
         let mut size = 0u32;
-        piece[start] = id;
-        stack.push(start as u32);
+        piece[start as usize] = id;
+        stack.push(start);
         while let Some(s) = stack.pop() {
             size += 1;
             for &t in &grid.neighbors[s as usize] {
@@ -36,7 +42,14 @@ pub fn pieces(grid: &Grid, labels: &[u32]) -> (Vec<u32>, Vec<u32>) {
             }
         }
         sizes.push(size);
+        firsts.push(start);
     }
+    (piece, sizes, firsts)
+}
+
+/// Connected pieces of the whole labelling (see [`pieces_in`]): piece of each sample, sizes.
+pub fn pieces(grid: &Grid, labels: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let (piece, sizes, _) = pieces_in(grid, labels, 0..labels.len() as u32);
     (piece, sizes)
 }
 
@@ -104,31 +117,7 @@ pub fn make_connected(
     };
     // Pieces of the labelling within the scope (BFS never leaves a part, and every sample of
     // a part in scope is in scope).
-    let mut piece = vec![NONE; labels.len()];
-    let mut sizes: Vec<u32> = Vec::new();
-    let mut firsts: Vec<u32> = Vec::new();
-    let mut stack = Vec::new();
-    for &start in scope {
-        if piece[start as usize] != NONE {
-            continue;
-        }
-        let id = sizes.len() as u32;
-        let l = labels[start as usize];
-        let mut size = 0u32;
-        piece[start as usize] = id;
-        stack.push(start);
-        while let Some(s) = stack.pop() {
-            size += 1;
-            for &t in &grid.neighbors[s as usize] {
-                if t != NONE && piece[t as usize] == NONE && labels[t as usize] == l {
-                    piece[t as usize] = id;
-                    stack.push(t);
-                }
-            }
-        }
-        sizes.push(size);
-        firsts.push(start);
-    }
+    let (piece, sizes, firsts) = pieces_in(grid, labels, scope.iter().copied());
     // For each (part, solid component), its largest piece (the first one on ties).
     let mut best: std::collections::BTreeMap<(u32, u32), u32> = std::collections::BTreeMap::new();
     for (p, &first) in firsts.iter().enumerate() {

@@ -41,6 +41,7 @@ mod mesh;
 pub mod metrics;
 pub mod moments;
 pub mod optimization;
+mod parallel;
 mod params;
 pub mod partition;
 pub mod refinement;

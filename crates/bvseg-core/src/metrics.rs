@@ -101,17 +101,7 @@ pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<[i64; 3]> {
 
 /// TOV, OV and MOV of `volumes`, where volume `i` bounds a part of `counts[i]` samples.
 pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) -> Outside {
-    let per: Vec<Vec<[i64; 3]>> = {
-        #[cfg(feature = "parallel")]
-        {
-            use rayon::prelude::*;
-            volumes.par_iter().map(|v| outside_cells(grid, v)).collect()
-        }
-        #[cfg(not(feature = "parallel"))]
-        {
-            volumes.iter().map(|v| outside_cells(grid, v)).collect()
-        }
-    };
+    let per: Vec<Vec<[i64; 3]>> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
     outside_from_cells(
         &per.iter().map(|c| c.as_slice()).collect::<Vec<_>>(),
         counts,
