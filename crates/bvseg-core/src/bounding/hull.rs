@@ -720,7 +720,8 @@ impl DirMap {
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             let scale = t.iter().map(|v| v.length()).fold(0.0f64, f64::max);
             let dist = n.dot(t[0]);
-            if !(dist.abs() > 1e-6 * n.length() * scale) {
+            let far_enough = dist.abs() > 1e-6 * n.length() * scale;
+            if !far_enough {
                 global.push(k as u32);
                 continue;
             }
