@@ -47,7 +47,7 @@ impl Hull {
 /// the two ends of a collinear set, one point for duplicates of one point, nothing for an empty
 /// input. Non-finite points are ignored.
 pub fn hull_points(points: &[DVec3]) -> Vec<DVec3> {
-    convex_hull(points).vertices
+    hull(points, false).vertices
 }
 
 /// Relative tolerance (of the bounding box's largest side) below which a point outside a face
@@ -63,6 +63,11 @@ const ORIENT_ERR: f64 = 1e-15;
 /// The convex hull of `points` (see [`Hull`]). Deterministic: the same input gives the same
 /// output, vertex and face order included. Non-finite points are ignored.
 pub fn convex_hull(points: &[DVec3]) -> Hull {
+    hull(points, true)
+}
+
+/// [`convex_hull`], without the 3D faces unless `with_faces`.
+fn hull(points: &[DVec3], with_faces: bool) -> Hull {
     let idx: Vec<usize> = (0..points.len())
         .filter(|&i| points[i].is_finite())
         .collect();
@@ -117,7 +122,8 @@ pub fn convex_hull(points: &[DVec3]) -> Hull {
         }
         Raw::Polytope(faces) => {
             let verts: Vec<usize> = faces.iter().flatten().copied().collect();
-            from_vertices(points, &idx, &verts, &faces, 3)
+            let faces = if with_faces { &faces[..] } else { &[] };
+            from_vertices(points, &idx, &verts, faces, 3)
         }
         Raw::Cloud(verts) => from_vertices(points, &idx, &verts, &[], 3),
     };

@@ -13,7 +13,9 @@
 //! vertices all lie near the optimal ellipsoid. So a primal log-barrier method (Newton steps
 //! on the `(d + 1)(d + 2) / 2` entries of the ellipsoid's matrix, whatever the number of
 //! points) first brings the duality gap near the target, and Todd–Yildirim steps then finish
-//! and certify from its dual weights. Points are first put in their principal frame and
+//! and certify from its dual weights, over all the points. Between two centrings the barrier
+//! drops the points that provably cannot support the optimum (Harman and Pronzato's bound),
+//! usually most of them, so that only the first centring works on every point. Points are first put in their principal frame and
 //! scaled to a unit box, which makes both blind to position, scale and anisotropy (the MVEE
 //! is affine-equivariant).
 //!
