@@ -6,11 +6,12 @@
 //! each part's enclosure points (boundary samples, shared cell-face centres and mesh vertices).
 //! Each benchmark fits every part once per iteration; the throughput line gives fits per
 //! second, and the per-fit time is the iteration time divided by the part count printed
-//! before it.
+//! before it. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
+//! count): `hull_points`, then `Fitter::fit_points` on the hull.
 use std::path::{Path, PathBuf};
 
 use bvseg::bounding::hull::hull_points;
-use bvseg::bounding::mvee::mvee;
+use bvseg::bounding::mvee::mvee_of_hull;
 use bvseg::enclosure::Enclosure;
 use bvseg::fitting::{Fitter, MVEE_TOL};
 use bvseg::partition::Solid;
@@ -89,7 +90,7 @@ fn bench(c: &mut Criterion) {
             g.bench_function(format!("mvee_of_hull_tol{tol:e}"), |b| {
                 b.iter(|| {
                     for h in &hulls {
-                        black_box(mvee(black_box(h), tol, min_r));
+                        black_box(mvee_of_hull(black_box(h), tol, min_r));
                     }
                 })
             });
@@ -106,12 +107,16 @@ fn bench(c: &mut Criterion) {
 
         // One part alone, the one with the most points.
         let big = (0..n).max_by_key(|&i| pts[i]).unwrap_or(0);
+        println!(
+            "{}: largest part {} points, {} hull vertices",
+            cs.name, pts[big], hv[big]
+        );
         let mut g = c.benchmark_group(format!("fit/{}/largest_part", cs.name));
-        g.bench_function(format!("hull_points_n{}", pts[big]), |b| {
+        g.bench_function("hull_points", |b| {
             b.iter(|| hull_points(black_box(&cs.parts[big])))
         });
-        g.bench_function(format!("mvee_tol{MVEE_TOL:e}_h{}", hv[big]), |b| {
-            b.iter(|| mvee(black_box(&hulls[big]), MVEE_TOL, min_r))
+        g.bench_function("mvee_of_hull", |b| {
+            b.iter(|| mvee_of_hull(black_box(&hulls[big]), MVEE_TOL, min_r))
         });
         g.finish();
     }

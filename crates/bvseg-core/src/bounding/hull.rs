@@ -47,7 +47,7 @@ impl Hull {
 /// the two ends of a collinear set, one point for duplicates of one point, nothing for an empty
 /// input. Non-finite points are ignored.
 pub fn hull_points(points: &[DVec3]) -> Vec<DVec3> {
-    convex_hull(points).vertices
+    hull(points, false).vertices
 }
 
 /// Relative tolerance (of the bounding box's largest side) below which a point outside a face
@@ -63,6 +63,11 @@ const ORIENT_ERR: f64 = 1e-15;
 /// The convex hull of `points` (see [`Hull`]). Deterministic: the same input gives the same
 /// output, vertex and face order included. Non-finite points are ignored.
 pub fn convex_hull(points: &[DVec3]) -> Hull {
+    hull(points, true)
+}
+
+/// [`convex_hull`], without the 3D faces unless `with_faces`.
+fn hull(points: &[DVec3], with_faces: bool) -> Hull {
     let idx: Vec<usize> = (0..points.len())
         .filter(|&i| points[i].is_finite())
         .collect();
@@ -117,7 +122,8 @@ pub fn convex_hull(points: &[DVec3]) -> Hull {
         }
         Raw::Polytope(faces) => {
             let verts: Vec<usize> = faces.iter().flatten().copied().collect();
-            from_vertices(points, &idx, &verts, &faces, 3)
+            let faces = if with_faces { &faces[..] } else { &[] };
+            from_vertices(points, &idx, &verts, faces, 3)
         }
         Raw::Cloud(verts) => from_vertices(points, &idx, &verts, &[], 3),
     };
@@ -142,10 +148,19 @@ fn from_vertices(
     faces: &[[usize; 3]],
     dim: usize,
 ) -> Hull {
-    let mut used: Vec<usize> = verts.to_vec();
-    used.sort_unstable();
-    used.dedup();
-    let remap = |v: usize| used.binary_search(&v).map_or(0, |k| k as u32);
+    // Position of each used vertex among the used ones, in increasing index order.
+    let mut remap = vec![u32::MAX; idx.len()];
+    for &v in verts {
+        remap[v] = 0;
+    }
+    let mut used: Vec<usize> = Vec::with_capacity(verts.len().min(idx.len()));
+    for (v, r) in remap.iter_mut().enumerate() {
+        if *r == 0 {
+            *r = used.len() as u32;
+            used.push(v);
+        }
+    }
+    let remap = |v: usize| remap[v];
     Hull {
         vertices: used.iter().map(|&v| points[idx[v]]).collect(),
         indices: used.iter().map(|&v| idx[v]).collect(),
@@ -204,7 +219,7 @@ impl<'a> QuickHull<'a> {
         Self {
             q,
             eps,
-            faces: Vec::new(),
+            faces: Vec::with_capacity(q.len() + 64),
             stamp: 0,
             planes: Vec::new(),
             pool: Vec::new(),
@@ -242,7 +257,8 @@ impl<'a> QuickHull<'a> {
     /// total and deterministic.
     fn key(&self, f: u32) -> (u64, u32) {
         let face = &self.faces[f as usize];
-        let d = face.far_d / face.n.length();
+        // `thr` is `eps |n|`, so this is the distance over `eps`.
+        let d = face.far_d / face.thr;
         (d.max(0.0).to_bits(), f)
     }
 
@@ -272,16 +288,10 @@ impl<'a> QuickHull<'a> {
                 p.x + p.y - p.z,
                 p.x - p.y + p.z,
                 -p.x + p.y + p.z,
-                p.x + p.y,
-                p.x - p.y,
-                p.y + p.z,
-                p.y - p.z,
-                p.z + p.x,
-                p.z - p.x,
             ]
         };
-        let mut lo = [(f64::INFINITY, 0usize); 13];
-        let mut hi = [(f64::NEG_INFINITY, 0usize); 13];
+        let mut lo = [(f64::INFINITY, 0usize); 7];
+        let mut hi = [(f64::NEG_INFINITY, 0usize); 7];
         for (i, p) in q.iter().enumerate() {
             for (k, t) in key(p).into_iter().enumerate() {
                 if t < lo[k].0 {
@@ -694,8 +704,6 @@ struct DirMap {
     g: usize,
     start: Vec<u32>,
     list: Vec<u32>,
-    /// Faces too close to `c` to project reliably: listed for every direction.
-    global: Vec<u32>,
 }
 
 impl DirMap {
@@ -710,6 +718,7 @@ impl DirMap {
         let ncell = 6 * g * g;
         let gh = 0.5 * g as f64;
         let mut pairs: Vec<(u32, u32)> = Vec::new();
+        // Faces too close to `c` to project reliably: listed for every direction.
         let mut global = Vec::new();
         for (k, t) in faces.enumerate() {
             let t = t.map(|v| v - c);
@@ -717,7 +726,8 @@ impl DirMap {
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             let scale = t.iter().map(|v| v.length()).fold(0.0f64, f64::max);
             let dist = n.dot(t[0]);
-            if dist.is_nan() || dist.abs() <= 1e-6 * n.length() * scale {
+            let far_enough = dist.abs() > 1e-6 * n.length() * scale;
+            if !far_enough {
                 global.push(k as u32);
                 continue;
             }
@@ -764,6 +774,10 @@ impl DirMap {
                 }
             }
         }
+        global.dedup();
+        for &k in &global {
+            pairs.extend((0..ncell as u32).map(|cell| (cell, k)));
+        }
         // Bucket by cell (a stable counting sort keeps each cell's faces in face order).
         let mut start = vec![0u32; ncell + 1];
         for &(cell, _) in &pairs {
@@ -778,14 +792,7 @@ impl DirMap {
             list[fill[cell as usize] as usize] = f;
             fill[cell as usize] += 1;
         }
-        global.sort_unstable();
-        global.dedup();
-        Self {
-            g,
-            start,
-            list,
-            global,
-        }
+        Self { g, start, list }
     }
 
     /// The cube side whose (widened) cone alone holds direction `d`, if exactly one does.
@@ -864,10 +871,9 @@ impl DirMap {
 
     /// The faces a ray from `c` in direction `d` may leave through.
     #[inline]
-    fn faces(&self, d: DVec3) -> impl Iterator<Item = &u32> {
+    fn faces(&self, d: DVec3) -> &[u32] {
         let cell = Self::cell_of(self.g, d);
-        let l = &self.list[self.start[cell] as usize..self.start[cell + 1] as usize];
-        self.global.iter().chain(l)
+        &self.list[self.start[cell] as usize..self.start[cell + 1] as usize]
     }
 }
 
@@ -1134,5 +1140,91 @@ mod tests {
         let h = convex_hull(&tet);
         check_hull(&tet, &h);
         assert_eq!((h.vertices.len(), h.faces.len()), (4, 4));
+    }
+
+    /// The ray from the centre in any direction leaves through a face that the direction
+    /// map lists for that direction.
+    #[test]
+    fn direction_map_lists_the_exit_face() {
+        let mut rng = Rng::new(5);
+        for n in [6usize, 20, 100, 400] {
+            let pts: Vec<DVec3> = (0..n)
+                .map(|_| {
+                    let d = DVec3::new(
+                        rng.next_f64() - 0.5,
+                        rng.next_f64() * 3.0 - 1.5,
+                        rng.next_f64() - 0.5,
+                    );
+                    d.normalize() * (1.0 + rng.next_f64())
+                })
+                .collect();
+            let h = convex_hull(&pts);
+            let c = h.vertices.iter().copied().sum::<DVec3>() / h.vertices.len() as f64;
+            let map = DirMap::new(c, h.faces.iter().map(|f| f.map(|i| h.vertices[i as usize])));
+            for _ in 0..5000 {
+                let d = DVec3::new(
+                    rng.next_f64() - 0.5,
+                    rng.next_f64() - 0.5,
+                    rng.next_f64() - 0.5,
+                );
+                // The exit face: the first face plane the ray meets.
+                let mut exit = (f64::INFINITY, 0);
+                for (k, f) in h.faces.iter().enumerate() {
+                    let [a, b, e] = f.map(|i| h.vertices[i as usize]);
+                    let nrm = (b - a).cross(e - a);
+                    if nrm.dot(d) > 0.0 {
+                        let t = nrm.dot(a - c) / nrm.dot(d);
+                        if t < exit.0 {
+                            exit = (t, k as u32);
+                        }
+                    }
+                }
+                assert!(map.faces(d).contains(&exit.1), "n {n}, direction {d}");
+            }
+        }
+    }
+
+    /// Cell centres and cell-face centres of a voxelised ball, plus points on its sphere:
+    /// the many coplanar and collinear ties of the pipeline's inputs. Every returned vertex is
+    /// a vertex of the hull of the returned vertices (no point in the middle of a facet).
+    #[test]
+    fn lattice_ball_with_surface_points() {
+        let mut rng = Rng::new(17);
+        let h = 0.1;
+        let inside = |i: i32, j: i32, k: i32| (i * i + j * j + k * k) as f64 * h * h <= 1.0;
+        let mut pts = Vec::new();
+        for i in -11..=11 {
+            for j in -11..=11 {
+                for k in -11..=11 {
+                    if !inside(i, j, k) {
+                        continue;
+                    }
+                    let p = DVec3::new(i as f64, j as f64, k as f64) * h;
+                    pts.push(p);
+                    if !inside(i + 1, j, k) {
+                        pts.push(p + DVec3::X * (0.5 * h));
+                    }
+                    if !inside(i, j, k - 1) {
+                        pts.push(p - DVec3::Z * (0.5 * h));
+                    }
+                }
+            }
+        }
+        for _ in 0..300 {
+            let d = DVec3::new(
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+            );
+            if d.z > 0.0 {
+                pts.push(d.normalize() * 1.02);
+            }
+        }
+        let hull = convex_hull(&pts);
+        check_hull(&pts, &hull);
+        assert_eq!(hull.dim, 3);
+        let again = convex_hull(&hull.vertices);
+        assert_eq!(again.vertices, hull.vertices);
+        assert_eq!(hull, convex_hull(&pts));
     }
 }

@@ -13,7 +13,9 @@
 //! vertices all lie near the optimal ellipsoid. So a primal log-barrier method (Newton steps
 //! on the `(d + 1)(d + 2) / 2` entries of the ellipsoid's matrix, whatever the number of
 //! points) first brings the duality gap near the target, and Todd–Yildirim steps then finish
-//! and certify from its dual weights. Points are first put in their principal frame and
+//! and certify from its dual weights, over all the points. Between two centrings the barrier
+//! drops the points that provably cannot support the optimum (Harman and Pronzato's bound),
+//! usually most of them, so that only the first centring works on every point. Points are first put in their principal frame and
 //! scaled to a unit box, which makes both blind to position, scale and anisotropy (the MVEE
 //! is affine-equivariant).
 //!
@@ -1139,6 +1141,39 @@ mod tests {
             assert_contains(&e, &pts);
             assert!(e.radii.min_element() >= min_r);
         }
+    }
+
+    #[test]
+    fn of_hull_matches_the_general_fit() {
+        let mut rng = Rng::new(13);
+        let rot = DMat3::from_euler(EulerRot::XYZ, 0.3, 1.1, -0.6);
+        // A blob's points plus grid-cell centres: lattice ties, as in the pipeline.
+        let mut pts = blob(&mut rng, 1500);
+        for i in 0..8 {
+            for j in 0..5 {
+                for k in 0..3 {
+                    pts.push(rot * DVec3::new(i as f64, j as f64, k as f64) * 0.5);
+                }
+            }
+        }
+        let hull = crate::bounding::hull::hull_points(&pts);
+        for tol in [1e-3, 1e-4] {
+            let e = mvee_of_hull(&hull, tol, 1e-6);
+            assert_contains(&e, &pts);
+            let opt = mvee(&pts, 1e-9, 1e-6);
+            let ratio = e.volume() / opt.volume();
+            assert!((1.0 - 1e-9..=1.0 + tol).contains(&ratio), "{tol}: {ratio}");
+            assert_eq!(e, mvee_of_hull(&hull, tol, 1e-6));
+        }
+        // Non-finite points are ignored, as by `mvee`.
+        let mut with_nan = hull.clone();
+        with_nan.push(DVec3::NAN);
+        assert_eq!(
+            mvee_of_hull(&with_nan, 1e-4, 1e-6),
+            mvee_of_hull(&hull, 1e-4, 1e-6)
+        );
+        let e = mvee_of_hull(&[], 1e-4, 0.5);
+        assert_eq!((e.center, e.radii), (DVec3::ZERO, DVec3::splat(0.5)));
     }
 
     #[test]
