@@ -57,7 +57,50 @@ pub fn fit_key(m: &Moments) -> FitKey {
 pub struct Fitter {
     kind: BoundingKind,
     enclosure: Enclosure,
-    cache: HashMap<FitKey, Arc<Fit>>,
+    cache: FitCache,
+}
+
+/// A two-generation cache with a memory budget: when the young generation outgrows
+/// [`CACHE_BYTES`], it becomes the old one and the previous old one is dropped. Fits in use
+/// stay alive through their `Arc`s; what is dropped is only refitted if asked for again.
+#[derive(Debug, Default)]
+struct FitCache {
+    young: HashMap<FitKey, Arc<Fit>>,
+    old: HashMap<FitKey, Arc<Fit>>,
+    young_bytes: usize,
+}
+
+/// Memory budget of one cache generation.
+const CACHE_BYTES: usize = 96 << 20;
+
+impl Fit {
+    fn bytes(&self) -> usize {
+        std::mem::size_of::<Fit>()
+            + self.hull.len() * std::mem::size_of::<DVec3>()
+            + self.outside.len() * std::mem::size_of::<[i64; 3]>()
+    }
+}
+
+impl FitCache {
+    fn get(&self, k: &FitKey) -> Option<&Arc<Fit>> {
+        self.young.get(k).or_else(|| self.old.get(k))
+    }
+
+    fn contains_key(&self, k: &FitKey) -> bool {
+        self.get(k).is_some()
+    }
+
+    fn insert(&mut self, k: FitKey, f: Arc<Fit>) {
+        if self.young.contains_key(&k) {
+            return;
+        }
+        if self.young_bytes > CACHE_BYTES {
+            self.old = std::mem::take(&mut self.young);
+            self.young_bytes = 0;
+        }
+        self.young_bytes += f.bytes();
+        self.young.insert(k, f);
+    }
 }
 
 impl Fitter {
@@ -66,7 +109,7 @@ impl Fitter {
         Self {
             kind,
             enclosure: Enclosure::new(mesh, solid),
-            cache: HashMap::new(),
+            cache: FitCache::default(),
         }
     }
 
@@ -140,7 +183,21 @@ impl Fitter {
                 self.cache.insert(keys[i], Arc::new(f));
             }
         }
-        keys.iter().map(|k| self.cache[k].clone()).collect()
+        // Everything asked for is in the cache now: fitted above or found before. Reading it
+        // back cannot miss, but fitting again is the safe answer if it ever did.
+        keys.iter()
+            .enumerate()
+            .map(|(i, k)| match self.cache.get(k) {
+                Some(f) => f.clone(),
+                None => {
+                    let mem: Vec<u32> = (0..labels.len() as u32)
+                        .filter(|&s| labels[s as usize] == i as u32)
+                        .collect();
+                    let pts = self.enclosure.points(mesh, solid, labels, &mem, i as u32);
+                    Arc::new(self.make(solid, &pts))
+                }
+            })
+            .collect()
     }
 
     /// Fit parts given directly by their enclosure points, keyed by their moments (for
@@ -154,7 +211,7 @@ impl Fitter {
         let one = |(k, p): &(FitKey, Vec<DVec3>)| (*k, self.make(solid, p));
         let new: Vec<(FitKey, Fit)> = crate::parallel::map(&todo, one);
         for (k, f) in new {
-            self.cache.entry(k).or_insert_with(|| Arc::new(f));
+            self.cache.insert(k, Arc::new(f));
         }
     }
 }
