@@ -81,7 +81,7 @@ pub fn lloyd(
         // After the first sweeps, samples only change part near the boundaries between parts:
         // re-assign the band of samples within two steps of one.
         let (band, pairs) = if sweep >= 1 {
-            boundary_band(solid, &part.labels, &samples)
+            boundary_band(solid, &part.labels, &samples, k)
         } else {
             (samples.clone(), Vec::new())
         };
@@ -173,11 +173,17 @@ pub fn lloyd(
 
 /// The samples of `scope` within two grid steps of a sample of another part (sorted), and
 /// the pairs of parts that touch there.
-fn boundary_band(solid: &Solid, labels: &[u32], scope: &[u32]) -> (Vec<u32>, Vec<(u32, u32)>) {
+fn boundary_band(
+    solid: &Solid,
+    labels: &[u32],
+    scope: &[u32],
+    k: usize,
+) -> (Vec<u32>, Vec<(u32, u32)>) {
     let g = &solid.grid;
     let mut mark = vec![false; labels.len()];
-    let mut band = Vec::new();
-    let mut pairs = Vec::new();
+    let mut ring = Vec::new();
+    // Touching pairs as a k x k bit set: sorting every sighting would cost more than the rest.
+    let mut touch = vec![0u64; (k * k).div_ceil(64)];
     for &s in scope {
         let l = labels[s as usize];
         let mut boundary = false;
@@ -185,33 +191,43 @@ fn boundary_band(solid: &Solid, labels: &[u32], scope: &[u32]) -> (Vec<u32>, Vec
             if t != NONE && labels[t as usize] != l {
                 boundary = true;
                 let m = labels[t as usize];
-                pairs.push((l.min(m), l.max(m)));
+                let bit = l.min(m) as usize * k + l.max(m) as usize;
+                touch[bit / 64] |= 1 << (bit % 64);
             }
         }
         if boundary {
             mark[s as usize] = true;
-            band.push(s);
+            ring.push(s);
         }
     }
-    let mut start = 0;
     for _ in 0..2 {
-        let end = band.len();
-        for i in start..end {
-            let s = band[i];
+        let mut next = Vec::new();
+        for &s in &ring {
             let l = labels[s as usize];
             for &t in &g.neighbors[s as usize] {
                 // Rings stay within the scope: a neighbour in the same part is in it.
                 if t != NONE && !mark[t as usize] && labels[t as usize] == l {
                     mark[t as usize] = true;
-                    band.push(t);
+                    next.push(t);
                 }
             }
         }
-        start = end;
+        ring = next;
     }
-    band.sort_unstable();
-    pairs.sort_unstable();
-    pairs.dedup();
+    let band = scope
+        .iter()
+        .copied()
+        .filter(|&s| mark[s as usize])
+        .collect();
+    let mut pairs = Vec::new();
+    for (w, &word) in touch.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let bit = w * 64 + bits.trailing_zeros() as usize;
+            pairs.push(((bit / k) as u32, (bit % k) as u32));
+            bits &= bits - 1;
+        }
+    }
     (band, pairs)
 }
 
