@@ -22,8 +22,10 @@
 //! ```
 //!
 //! The pipeline, one module per stage: [`sampling`] -> [`moments`] -> [`initialization`] ->
-//! [`assignment`] / [`flooding`] -> [`optimization`] -> [`refinement`] -> [`bounding`] /
-//! [`enclosure`] -> [`metrics`] -> [`hierarchy`].
+//! [`assignment`] / [`flooding`] -> [`optimization`] -> [`refinement`] (judged with
+//! [`fitting`]: [`bounding`] volumes of the [`enclosure`] points, measured by [`metrics`]) ->
+//! [`tightening`] -> [`hierarchy`]. [`Segmenter`] runs it step by step; [`segment`] runs it
+//! to the end.
 #![warn(missing_docs)]
 // Index loops over 3x3 matrices and parallel arrays read more clearly than iterator chains.
 #![allow(clippy::needless_range_loop)]
@@ -53,7 +55,7 @@ pub mod tightening;
 mod volume;
 
 pub use error::Error;
-pub use mesh::Mesh;
+pub use mesh::{Mesh, MAX_COORDINATE};
 pub use params::{BoundingKind, Params, MAX_SAMPLES};
 pub use refinement::Segmenter;
 pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind};

@@ -2,20 +2,24 @@
 //!
 //! 1. Start: a CVT with one part per connected piece of the solid (or `k` parts in fixed-k
 //!    mode), optimised.
-//! 2. Refine (tolerance mode): while TOV >= sigma_G or MOV >= sigma_L and k < max_k, split
-//!    the part with the largest OV and re-optimise it with its neighbours; if TOV got worse,
-//!    undo and try the part with the next largest OV (up to [`SPLIT_TRIES`] parts), and if
-//!    every try fails keep the first.
-//! 3. Merge: merge the touching pair whose merge lowers TOV most, while one does and the
-//!    tolerances stay met.
-//! 4. Final: fit the output volumes (minimum-volume ellipsoids, boxes or the smaller of the
-//!    two) to each part's enclosure points, measure, and build the hierarchy.
+//! 2. Refine (tolerance mode): while TOV >= sigma_G or MOV >= sigma_L and k < max_k, split a
+//!    part and re-optimise it with its neighbours. While TOV is out of tolerance the part that
+//!    adds the most outside volume is split, once only MOV is, the part with the largest OV
+//!    (the paper's choice). A split that does not improve the figure out of tolerance is
+//!    undone and the next part tried (up to [`SPLIT_TRIES`]); if every try fails the first is
+//!    kept. Beyond the paper: when only MOV is out of tolerance, merging the worst part into
+//!    a neighbour is tried first, and refinement stops when MOV has not improved for
+//!    [`MOV_PATIENCE`] steps.
+//! 3. Merge: merge the pair (touching, or with overlapping volumes) whose merge lowers TOV
+//!    most, while one does and the tolerances stay met.
+//! 4. Final: the tightening ([`crate::tightening`]), then the measured result and the
+//!    hierarchy.
 //!
 //! Beyond the paper, which judges steps 2-3 with scaled Legendre ellipsoids, every step is
 //! judged with the output volumes themselves, fitted to the points the output must enclose
 //! (see [`crate::enclosure`]): the tolerances then hold for what the user gets, not for a
 //! proxy. A part's fit depends only on its set of samples, so fits are cached by the part's
-//! exact moments and only the parts a step changed are refitted.
+//! exact moments ([`crate::fitting`]) and only the parts a step changed are refitted.
 use glam::DVec3;
 
 use std::sync::Arc;

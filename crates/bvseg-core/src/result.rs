@@ -99,8 +99,8 @@ pub struct Segmentation {
     pub metrics: Metrics,
     /// Every refinement step, in order.
     pub history: Vec<Step>,
-    /// Binary hierarchy over the parts; the root is the last node (empty when k = 1... no:
-    /// with one part the hierarchy is that single leaf).
+    /// Binary hierarchy over the parts: nodes `0..k` are the parts' leaves, the root is the
+    /// last node (with one part, that single leaf).
     pub hierarchy: Vec<HierarchyNode>,
     /// For each input triangle, the part whose volume encloses it.
     pub triangle_parts: Vec<u32>,
