@@ -229,32 +229,38 @@ pub fn tighten(
                 m_to,
             });
         }
-        // Fit the changed parts of every candidate (cached; in parallel).
+        // Fit the changed parts of every candidate (cached; in parallel): (candidate, side)
+        // for each part not fitted yet, side 0 the giving part and 1 the receiving one.
         let members = part.members();
-        let mut work = Vec::new();
-        for mv in &cands {
+        let todo: Vec<(usize, bool)> = cands
+            .iter()
+            .enumerate()
+            .flat_map(|(i, mv)| {
+                let from = fitter.get(&mv.m_from).is_none().then_some((i, false));
+                let to = fitter.get(&mv.m_to).is_none().then_some((i, true));
+                from.into_iter().chain(to)
+            })
+            .collect();
+        let enclosure = fitter.enclosure();
+        let work = crate::parallel::map(&todo, |&(i, receiving)| {
+            let mv = &cands[i];
             let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
             let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
-            if fitter.get(&mv.m_from).is_none() {
+            if receiving {
+                let mut mem = members[mv.to as usize].clone();
+                mem.extend_from_slice(&mv.layer);
+                let pts = enclosure.points_with(mesh, solid, label_of, &mem, mv.to);
+                (mv.m_to, pts)
+            } else {
                 let mem: Vec<u32> = members[mv.from as usize]
                     .iter()
                     .copied()
                     .filter(|&s| !in_layer(s as usize))
                     .collect();
-                let pts = fitter
-                    .enclosure()
-                    .points_with(mesh, solid, label_of, &mem, mv.from);
-                work.push((mv.m_from, pts));
+                let pts = enclosure.points_with(mesh, solid, label_of, &mem, mv.from);
+                (mv.m_from, pts)
             }
-            if fitter.get(&mv.m_to).is_none() {
-                let mut mem = members[mv.to as usize].clone();
-                mem.extend_from_slice(&mv.layer);
-                let pts = fitter
-                    .enclosure()
-                    .points_with(mesh, solid, label_of, &mem, mv.to);
-                work.push((mv.m_to, pts));
-            }
-        }
+        });
         fitter.fit_candidates(solid, work);
         // Gains against the current state.
         let ov = |f: &Fit, n: f64| f.outside.len() as f64 / n.max(1.0);
