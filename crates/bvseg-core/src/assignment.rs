@@ -87,24 +87,13 @@ pub fn assign_local(
     candidates: &[Vec<u32>],
     rule: Rule,
 ) -> Vec<u32> {
-    let best = |&s: &u32| {
-        let x = q[s as usize];
-        let cands = &candidates[labels[s as usize] as usize];
-        let mut best = labels[s as usize];
-        let mut best_cost = f64::INFINITY;
-        for &j in cands {
-            let c = metrics[j as usize].cost(x, rule);
-            if c < best_cost {
-                best_cost = c;
-                best = j;
-            }
-        }
-        best
-    };
-    crate::parallel::map_chunked(samples, 1024, best)
+    crate::parallel::map_chunked(samples, 1024, |&s| {
+        let own = labels[s as usize];
+        cheapest(q[s as usize], &candidates[own as usize], metrics, rule).unwrap_or(own)
+    })
 }
 
-/// For each sample in `samples`, the candidate part of least cost (ties: the lower index).
+/// For each sample in `samples`, the candidate part of least cost (ties: the first listed).
 pub fn assign(
     q: &[DVec3],
     samples: &[u32],
@@ -112,20 +101,24 @@ pub fn assign(
     candidates: &[u32],
     rule: Rule,
 ) -> Vec<u32> {
-    let best = |&s: &u32| {
-        let x = q[s as usize];
-        let mut best = candidates[0];
-        let mut best_cost = f64::INFINITY;
-        for &j in candidates {
-            let c = metrics[j as usize].cost(x, rule);
-            if c < best_cost {
-                best_cost = c;
-                best = j;
-            }
+    crate::parallel::map_chunked(samples, 1024, |&s| {
+        cheapest(q[s as usize], candidates, metrics, rule).unwrap_or(candidates[0])
+    })
+}
+
+/// The candidate of least finite cost for `x` (the first on ties), if any.
+#[inline]
+fn cheapest(x: DVec3, candidates: &[u32], metrics: &[PartMetric], rule: Rule) -> Option<u32> {
+    let mut best = None;
+    let mut best_cost = f64::INFINITY;
+    for &j in candidates {
+        let c = metrics[j as usize].cost(x, rule);
+        if c < best_cost {
+            best_cost = c;
+            best = Some(j);
         }
-        best
-    };
-    crate::parallel::map_chunked(samples, 1024, best)
+    }
+    best
 }
 
 #[cfg(test)]

@@ -55,20 +55,27 @@ pub fn ellipsoid(c: DVec3, radii: DVec3, rot: DMat3, n: usize) -> Mesh {
         }
     }
     v.push(c + rot * DVec3::new(0.0, 0.0, radii.z));
-    let top = (v.len() - 1) as u32;
-    let ring = |r: usize, s: usize| (1 + (r - 1) * n + s % n) as u32;
+    let t = stitch_rings(rings - 1, n, v.len());
+    mesh(v, t)
+}
+
+/// Triangles closing a surface of revolution whose vertices are: the bottom pole (index 0),
+/// `m` rings of `n` vertices from bottom to top, and the top pole (index `count - 1`).
+fn stitch_rings(m: usize, n: usize, count: usize) -> Vec<[u32; 3]> {
+    let top = (count - 1) as u32;
+    let ring = |r: usize, s: usize| (1 + r * n + s % n) as u32;
     let mut t = Vec::new();
     for s in 0..n {
-        t.push([0, ring(1, s + 1), ring(1, s)]);
-        t.push([top, ring(rings - 1, s), ring(rings - 1, s + 1)]);
+        t.push([0, ring(0, s + 1), ring(0, s)]);
+        t.push([top, ring(m - 1, s), ring(m - 1, s + 1)]);
     }
-    for r in 1..rings - 1 {
+    for r in 0..m - 1 {
         for s in 0..n {
             t.push([ring(r, s), ring(r, s + 1), ring(r + 1, s + 1)]);
             t.push([ring(r, s), ring(r + 1, s + 1), ring(r + 1, s)]);
         }
     }
-    mesh(v, t)
+    t
 }
 
 /// A capsule from `a` to `b` with radius `r` (`n` segments around).
@@ -98,20 +105,7 @@ pub fn capsule(a: DVec3, b: DVec3, r: f64, n: usize) -> Mesh {
         }
     }
     v.push(a + rot * DVec3::new(0.0, 0.0, len + r));
-    let top = (v.len() - 1) as u32;
-    let m = rings.len();
-    let ring = |r: usize, s: usize| (1 + r * n + s % n) as u32;
-    let mut t = Vec::new();
-    for s in 0..n {
-        t.push([0, ring(0, s + 1), ring(0, s)]);
-        t.push([top, ring(m - 1, s), ring(m - 1, s + 1)]);
-    }
-    for r in 0..m - 1 {
-        for s in 0..n {
-            t.push([ring(r, s), ring(r, s + 1), ring(r + 1, s + 1)]);
-            t.push([ring(r, s), ring(r + 1, s + 1), ring(r + 1, s)]);
-        }
-    }
+    let t = stitch_rings(rings.len(), n, v.len());
     mesh(v, t)
 }
 
