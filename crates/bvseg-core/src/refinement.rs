@@ -32,13 +32,16 @@ use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::partition::{Partition, Solid};
 use crate::sampling::Grid;
-use crate::tightening::{tighten, Coverage};
+use crate::tightening::{relieve_worst, tighten, Coverage};
 use crate::{
     hierarchy, BoundingVolume, Error, Mesh, Metrics, Params, Part, Segmentation, Step, StepKind,
 };
 
 /// Passes of the outside-volume tightening (see [`crate::tightening`]).
 pub const TIGHTEN_PASSES: usize = 12;
+
+/// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
+pub const RELIEVE_STEPS: usize = 40;
 
 /// Refinement steps without a better MOV (while only MOV is out of tolerance) after which
 /// refinement stops.
@@ -521,6 +524,18 @@ impl Segmenter {
                 TIGHTEN_PASSES,
                 self.params.mov,
             );
+            if self.params.k.is_none() {
+                relieve_worst(
+                    &self.mesh,
+                    &self.solid,
+                    &self.comps,
+                    &mut self.fitter,
+                    &mut part,
+                    RELIEVE_STEPS,
+                    self.params.tov,
+                    self.params.mov,
+                );
+            }
             self.evaluate(part)
         } else {
             cur

@@ -334,3 +334,148 @@ pub fn tighten(
     }
     moves
 }
+
+/// Beyond the paper, for tolerance mode: while MOV is out of tolerance, move a layer between
+/// the part with the largest OV and one of its neighbours (either way) when that lowers MOV
+/// and keeps TOV under `max(current TOV, tov_tol)`. Up to `steps` moves; returns how many.
+#[allow(clippy::too_many_arguments)]
+pub fn relieve_worst(
+    mesh: &Mesh,
+    solid: &Solid,
+    comps: &[u32],
+    fitter: &mut Fitter,
+    part: &mut Partition,
+    steps: usize,
+    tov_tol: f64,
+    mov_tol: f64,
+) -> usize {
+    let g = &solid.grid;
+    let total = solid.len() as f64;
+    let min_part = (solid.len() / (4 * part.k()).max(1)).max(8);
+    let mut moves = 0;
+    for _ in 0..steps {
+        let fits = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
+        let ov: Vec<f64> = fits
+            .iter()
+            .zip(&part.parts)
+            .map(|(f, m)| f.outside.len() as f64 / m.n.max(1.0))
+            .collect();
+        let Some(w) = (0..ov.len()).max_by(|&a, &b| ov[a].total_cmp(&ov[b]).then(b.cmp(&a))) else {
+            break;
+        };
+        let cur_mov = ov[w];
+        if cur_mov < mov_tol {
+            break;
+        }
+        let mut cov = Coverage::new(solid);
+        for f in &fits {
+            cov.add(&f.outside);
+        }
+        let cur_tov = cov.union as f64 / total;
+        let w32 = w as u32;
+        // Layers between the worst part and each neighbour, both ways.
+        let mut layers: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+        for s in 0..solid.len() {
+            let a = part.labels[s];
+            for &t in &g.neighbors[s] {
+                if t == NONE {
+                    continue;
+                }
+                let b = part.labels[t as usize];
+                if a != b && (a == w32 || b == w32) {
+                    let l = layers.entry((a, b)).or_default();
+                    if l.last() != Some(&(s as u32)) {
+                        l.push(s as u32);
+                    }
+                }
+            }
+        }
+        let mut cands: Vec<Move> = Vec::new();
+        for ((a, b), layer) in layers {
+            let n_from = part.parts[a as usize].n as usize;
+            if 2 * layer.len() > n_from || n_from - layer.len() < min_part {
+                continue;
+            }
+            let mut m_from = part.parts[a as usize];
+            let mut m_to = part.parts[b as usize];
+            for &s in &layer {
+                m_from.remove(solid.q[s as usize]);
+                m_to.add(solid.q[s as usize]);
+            }
+            cands.push(Move {
+                from: a,
+                to: b,
+                layer,
+                m_from,
+                m_to,
+            });
+        }
+        let members = part.members();
+        let enclosure = fitter.enclosure();
+        let work: Vec<(Moments, Vec<glam::DVec3>)> = crate::parallel::map(&cands, |mv| {
+            let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
+            let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
+            let from: Vec<u32> = members[mv.from as usize]
+                .iter()
+                .copied()
+                .filter(|&s| !in_layer(s as usize))
+                .collect();
+            let mut to = members[mv.to as usize].clone();
+            to.extend_from_slice(&mv.layer);
+            [
+                (
+                    mv.m_from,
+                    enclosure.points_with(mesh, solid, label_of, &from, mv.from),
+                ),
+                (
+                    mv.m_to,
+                    enclosure.points_with(mesh, solid, label_of, &to, mv.to),
+                ),
+            ]
+        })
+        .into_iter()
+        .flatten()
+        .collect();
+        fitter.fit_candidates(solid, work);
+        let mut best: Option<(f64, usize)> = None;
+        for (i, mv) in cands.iter().enumerate() {
+            let (a, b) = (mv.from as usize, mv.to as usize);
+            let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
+                continue;
+            };
+            let others = (0..ov.len())
+                .filter(|&j| j != a && j != b)
+                .map(|j| ov[j])
+                .fold(0.0f64, f64::max);
+            let mov = others
+                .max(fa.outside.len() as f64 / mv.m_from.n)
+                .max(fb.outside.len() as f64 / mv.m_to.n);
+            cov.remove(&fits[a].outside);
+            cov.remove(&fits[b].outside);
+            cov.add(&fa.outside);
+            cov.add(&fb.outside);
+            let tov = cov.union as f64 / total;
+            cov.remove(&fa.outside);
+            cov.remove(&fb.outside);
+            cov.add(&fits[a].outside);
+            cov.add(&fits[b].outside);
+            if mov < cur_mov && tov < cur_tov.max(tov_tol) && best.is_none_or(|x| mov < x.0) {
+                best = Some((mov, i));
+            }
+        }
+        let Some((_, i)) = best else {
+            break;
+        };
+        let mv = &cands[i];
+        if !stays_connected(solid, comps, part, mv.from, &mv.layer) {
+            break;
+        }
+        for &s in &mv.layer {
+            part.labels[s as usize] = mv.to;
+        }
+        part.parts[mv.from as usize] = mv.m_from;
+        part.parts[mv.to as usize] = mv.m_to;
+        moves += 1;
+    }
+    moves
+}
