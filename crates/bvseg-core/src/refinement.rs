@@ -12,8 +12,8 @@
 //!    [`MOV_PATIENCE`] steps.
 //! 3. Merge: merge the pair (touching, or with overlapping volumes) whose merge lowers TOV
 //!    most, while one does and the tolerances stay met.
-//! 4. Final: the tightening ([`crate::tightening`]), then the measured result and the
-//!    hierarchy.
+//! 4. Final: the tightening ([`crate::tightening`]; in tolerance mode followed by
+//!    [`crate::tightening::relieve_worst`]), then the measured result and the hierarchy.
 //!
 //! Beyond the paper, which judges steps 2-3 with scaled Legendre ellipsoids, every step is
 //! judged with the output volumes themselves, fitted to the points the output must enclose
