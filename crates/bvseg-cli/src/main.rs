@@ -196,6 +196,14 @@ fn segment(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
         None => "not written (use -o FILE.json)".into(),
     };
     print_summary(&name, &mesh, &seg, elapsed.as_secs_f64(), &written)?;
+    let m = seg.metrics;
+    if params.k.is_none() && !quiet && !(m.tov < params.tov && m.mov < params.mov) {
+        eprintln!(
+            "bvseg: warning: tolerances not met at k = {} (TOV {:.3} vs {}, MOV {:.3} vs {}); \
+             raise --max-k or the tolerances, or see BENCHMARKS.md on MOV",
+            m.k, m.tov, params.tov, m.mov, params.mov
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }
 
