@@ -190,6 +190,23 @@ impl Segmenter {
         step
     }
 
+    /// Make `s` the current state, recording the step that led to it.
+    fn accept(&mut self, kind: StepKind, s: State) -> Step {
+        let step = self.record(kind, &s);
+        self.state = Some(s);
+        step
+    }
+
+    /// Leave the refinement for the merge phase (or straight for the final step).
+    fn end_refinement(&mut self) -> Option<Step> {
+        self.phase = if self.params.merge {
+            Phase::Merge
+        } else {
+            Phase::Final
+        };
+        None
+    }
+
     fn meets(&self, s: &State) -> bool {
         s.tov < self.params.tov && s.mov < self.params.mov
     }
@@ -246,12 +263,7 @@ impl Segmenter {
         let cur = self.state.as_ref()?;
         let k = cur.part.k();
         if self.meets(cur) || k >= self.params.max_k || k >= self.solid.len() / 2 {
-            self.phase = if self.params.merge {
-                Phase::Merge
-            } else {
-                Phase::Final
-            };
-            return None;
+            return self.end_refinement();
         }
         if self.tries.is_empty() && self.first_try.is_none() {
             self.refine_steps += 1;
@@ -269,12 +281,7 @@ impl Segmenter {
                 } else {
                     self.stale += 1;
                     if self.stale > MOV_PATIENCE {
-                        self.phase = if self.params.merge {
-                            Phase::Merge
-                        } else {
-                            Phase::Final
-                        };
-                        return None;
+                        return self.end_refinement();
                     }
                 }
                 if let Some(step) = self.merge_worst() {
@@ -341,9 +348,7 @@ impl Segmenter {
             if better {
                 self.tries.clear();
                 self.first_try = None;
-                let step = self.record(StepKind::Split, &cand);
-                self.state = Some(cand);
-                return Some(step);
+                return Some(self.accept(StepKind::Split, cand));
             }
             let step = self.record(StepKind::Backtrack, &cand);
             if self.first_try.is_none() {
@@ -356,11 +361,7 @@ impl Segmenter {
         // Every try made TOV worse: keep the first (the part with the largest OV), as the
         // paper does, so that refinement always progresses.
         match self.first_try.take() {
-            Some(s) => {
-                let step = self.record(StepKind::Split, &s);
-                self.state = Some(s);
-                Some(step)
-            }
+            Some(s) => Some(self.accept(StepKind::Split, s)),
             None => {
                 // No part could be split at all.
                 self.phase = Phase::Final;
@@ -466,11 +467,7 @@ impl Segmenter {
             .filter(|&(tov, mov, _, _)| tov < cur_tov && (!met || (tov < tol_t && mov < tol_m)))
             .min_by(|x, y| x.0.total_cmp(&y.0).then((x.2, x.3).cmp(&(y.2, y.3))));
         match best.and_then(|(_, _, a, b)| self.merged_state(a, b)) {
-            Some(s) => {
-                let step = self.record(StepKind::Merge, &s);
-                self.state = Some(s);
-                Some(step)
-            }
+            Some(s) => Some(self.accept(StepKind::Merge, s)),
             None => {
                 self.phase = Phase::Final;
                 None
@@ -497,9 +494,7 @@ impl Segmenter {
             .filter(|&(tov, mov, _, _)| tov < tol_t && mov < cur_mov)
             .min_by(|x, y| x.1.total_cmp(&y.1).then((x.2, x.3).cmp(&(y.2, y.3))))?;
         let s = self.merged_state(best.2, best.3)?;
-        let step = self.record(StepKind::Merge, &s);
-        self.state = Some(s);
-        Some(step)
+        Some(self.accept(StepKind::Merge, s))
     }
 
     fn finalize(&mut self) -> Step {

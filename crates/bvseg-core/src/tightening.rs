@@ -92,6 +92,25 @@ impl Coverage {
         }
     }
 
+    /// The union after replacing the cells of `old` volumes by those of `new` ones; the
+    /// coverage is left as it was.
+    pub fn union_if(&mut self, old: [&[[i64; 3]]; 2], new: [&[[i64; 3]]; 2]) -> usize {
+        self.replace(old, new);
+        let union = self.union;
+        self.replace(new, old);
+        union
+    }
+
+    /// Replace the cells of `old` volumes by those of `new` ones.
+    pub fn replace(&mut self, old: [&[[i64; 3]]; 2], new: [&[[i64; 3]]; 2]) {
+        for c in old {
+            self.remove(c);
+        }
+        for c in new {
+            self.add(c);
+        }
+    }
+
     /// Undo one [`Coverage::add`] of `cells`.
     pub fn remove(&mut self, cells: &[[i64; 3]]) {
         for c in cells {
@@ -157,6 +176,116 @@ fn stays_connected(
     !per_comp.is_empty()
 }
 
+/// Layers: for every ordered pair `(a, b)` of touching parts that `wanted(a, b)` accepts, the
+/// samples of `a` that touch `b` (sorted).
+fn layers(
+    solid: &Solid,
+    part: &Partition,
+    wanted: impl Fn(u32, u32) -> bool,
+) -> BTreeMap<(u32, u32), Vec<u32>> {
+    let g = &solid.grid;
+    let mut layers: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+    for s in 0..solid.len() {
+        let a = part.labels[s];
+        for &t in &g.neighbors[s] {
+            if t == NONE {
+                continue;
+            }
+            let b = part.labels[t as usize];
+            if b != a && wanted(a, b) {
+                let l = layers.entry((a, b)).or_default();
+                if l.last() != Some(&(s as u32)) {
+                    l.push(s as u32);
+                }
+            }
+        }
+    }
+    layers
+}
+
+/// The move of `layer` from part `a` to part `b`, unless it is too large: moves stay local,
+/// and never shrink a part below `min_part` samples (tiny parts have huge relative outside
+/// volumes).
+fn layer_move(
+    solid: &Solid,
+    part: &Partition,
+    (a, b): (u32, u32),
+    layer: Vec<u32>,
+    min_part: usize,
+) -> Option<Move> {
+    let n_from = part.parts[a as usize].n as usize;
+    if 2 * layer.len() > n_from || n_from - layer.len() < min_part {
+        return None;
+    }
+    let mut m_from = part.parts[a as usize];
+    let mut m_to = part.parts[b as usize];
+    for &s in &layer {
+        m_from.remove(solid.q[s as usize]);
+        m_to.add(solid.q[s as usize]);
+    }
+    Some(Move {
+        from: a,
+        to: b,
+        layer,
+        m_from,
+        m_to,
+    })
+}
+
+/// A quarter of an average part: the smallest a move may leave a part.
+fn min_part(solid: &Solid, part: &Partition) -> usize {
+    (solid.len() / (4 * part.k()).max(1)).max(8)
+}
+
+/// Fit both changed parts of every move that the cache lacks (in parallel).
+fn fit_moves(mesh: &Mesh, solid: &Solid, fitter: &mut Fitter, part: &Partition, moves: &[Move]) {
+    // (move, side) for each part not fitted yet: `false` the giving part, `true` the receiving.
+    let todo: Vec<(usize, bool)> = moves
+        .iter()
+        .enumerate()
+        .flat_map(|(i, mv)| {
+            let from = fitter.get(&mv.m_from).is_none().then_some((i, false));
+            let to = fitter.get(&mv.m_to).is_none().then_some((i, true));
+            from.into_iter().chain(to)
+        })
+        .collect();
+    let members = part.members();
+    let enclosure = fitter.enclosure();
+    let work = crate::parallel::map(&todo, |&(i, receiving)| {
+        let mv = &moves[i];
+        let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
+        let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
+        if receiving {
+            let mut mem = members[mv.to as usize].clone();
+            mem.extend_from_slice(&mv.layer);
+            (
+                mv.m_to,
+                enclosure.points_with(mesh, solid, label_of, &mem, mv.to),
+            )
+        } else {
+            let mem: Vec<u32> = members[mv.from as usize]
+                .iter()
+                .copied()
+                .filter(|&s| !in_layer(s as usize))
+                .collect();
+            (
+                mv.m_from,
+                enclosure.points_with(mesh, solid, label_of, &mem, mv.from),
+            )
+        }
+    });
+    fitter.fit_candidates(solid, work);
+}
+
+/// Apply a move to the partition.
+fn apply(part: &mut Partition, mv: &Move) {
+    for &s in &mv.layer {
+        part.labels[s as usize] = mv.to;
+    }
+    part.parts[mv.from as usize] = mv.m_from;
+    part.parts[mv.to as usize] = mv.m_to;
+}
+
 /// Run up to `passes` passes of boundary-layer moves on `part`; returns the moves made.
 /// `mov_tol` is the per-part tolerance (sigma_L) a move may not push a part's OV past
 /// (unless that part was already past it).
@@ -176,38 +305,13 @@ pub fn tighten(
         cov.add(&f.outside);
     }
     let mut moves = 0;
-    let min_part = (solid.len() / (4 * part.k()).max(1)).max(8);
+    let min_part = min_part(solid, part);
     for _ in 0..passes {
-        // Layers: the samples of `a` that touch `b`, for every ordered pair of touching parts.
-        let mut layers: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
-        for s in 0..solid.len() {
-            let a = part.labels[s];
-            let mut last = NONE;
-            for &t in &g.neighbors[s] {
-                if t == NONE {
-                    continue;
-                }
-                let b = part.labels[t as usize];
-                if b != a && b != last {
-                    let l = layers.entry((a, b)).or_default();
-                    if l.last() != Some(&(s as u32)) {
-                        l.push(s as u32);
-                    }
-                    last = b;
-                }
-            }
-        }
         let mut cands: Vec<Move> = Vec::new();
-        for ((a, b), layer) in layers {
-            let n_from = part.parts[a as usize].n as usize;
-            // Keep moves local, and never shrink a part below a quarter of an average part:
-            // tiny parts have huge relative outside volumes (MOV).
-            if 2 * layer.len() > n_from || n_from - layer.len() < min_part {
-                continue;
-            }
+        for (pair, layer) in layers(solid, part, |_, _| true) {
             // A layer that sticks far out of the receiving part's volume would make it grow
             // more than the giving part can shrink: not worth a refit.
-            let to_volume = &fits[b as usize].volume;
+            let to_volume = &fits[pair.1 as usize].volume;
             let reach = layer
                 .iter()
                 .map(|&s| to_volume.gauge(g.points[s as usize]))
@@ -215,53 +319,9 @@ pub fn tighten(
             if reach > REACH {
                 continue;
             }
-            let mut m_from = part.parts[a as usize];
-            let mut m_to = part.parts[b as usize];
-            for &s in &layer {
-                m_from.remove(solid.q[s as usize]);
-                m_to.add(solid.q[s as usize]);
-            }
-            cands.push(Move {
-                from: a,
-                to: b,
-                layer,
-                m_from,
-                m_to,
-            });
+            cands.extend(layer_move(solid, part, pair, layer, min_part));
         }
-        // Fit the changed parts of every candidate (cached; in parallel): (candidate, side)
-        // for each part not fitted yet, side 0 the giving part and 1 the receiving one.
-        let members = part.members();
-        let todo: Vec<(usize, bool)> = cands
-            .iter()
-            .enumerate()
-            .flat_map(|(i, mv)| {
-                let from = fitter.get(&mv.m_from).is_none().then_some((i, false));
-                let to = fitter.get(&mv.m_to).is_none().then_some((i, true));
-                from.into_iter().chain(to)
-            })
-            .collect();
-        let enclosure = fitter.enclosure();
-        let work = crate::parallel::map(&todo, |&(i, receiving)| {
-            let mv = &cands[i];
-            let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
-            let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
-            if receiving {
-                let mut mem = members[mv.to as usize].clone();
-                mem.extend_from_slice(&mv.layer);
-                let pts = enclosure.points_with(mesh, solid, label_of, &mem, mv.to);
-                (mv.m_to, pts)
-            } else {
-                let mem: Vec<u32> = members[mv.from as usize]
-                    .iter()
-                    .copied()
-                    .filter(|&s| !in_layer(s as usize))
-                    .collect();
-                let pts = enclosure.points_with(mesh, solid, label_of, &mem, mv.from);
-                (mv.m_from, pts)
-            }
-        });
-        fitter.fit_candidates(solid, work);
+        fit_moves(mesh, solid, fitter, part, &cands);
         // Gains against the current state.
         let ov = |f: &Fit, n: f64| f.outside.len() as f64 / n.max(1.0);
         let mut scored: Vec<(i64, usize)> = Vec::new();
@@ -269,16 +329,11 @@ pub fn tighten(
             let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
                 continue;
             };
-            let before = cov.union as i64;
-            cov.remove(&fits[mv.from as usize].outside);
-            cov.remove(&fits[mv.to as usize].outside);
-            cov.add(&fa.outside);
-            cov.add(&fb.outside);
-            let gain = before - cov.union as i64;
-            cov.remove(&fa.outside);
-            cov.remove(&fb.outside);
-            cov.add(&fits[mv.from as usize].outside);
-            cov.add(&fits[mv.to as usize].outside);
+            let old = [
+                fits[mv.from as usize].outside.as_slice(),
+                fits[mv.to as usize].outside.as_slice(),
+            ];
+            let gain = cov.union as i64 - cov.union_if(old, [&fa.outside, &fb.outside]) as i64;
             if gain > 0 {
                 scored.push((gain, i));
             }
@@ -302,23 +357,17 @@ pub fn tighten(
             {
                 continue;
             }
-            let before = cov.union;
-            cov.remove(&fits[a].outside);
-            cov.remove(&fits[b].outside);
-            cov.add(&fa.outside);
-            cov.add(&fb.outside);
-            if cov.union >= before || !stays_connected(solid, comps, part, mv.from, &mv.layer) {
-                cov.remove(&fa.outside);
-                cov.remove(&fb.outside);
-                cov.add(&fits[a].outside);
-                cov.add(&fits[b].outside);
+            let (old, new) = (
+                [fits[a].outside.as_slice(), fits[b].outside.as_slice()],
+                [fa.outside.as_slice(), fb.outside.as_slice()],
+            );
+            if cov.union_if(old, new) >= cov.union
+                || !stays_connected(solid, comps, part, mv.from, &mv.layer)
+            {
                 continue;
             }
-            for &s in &mv.layer {
-                part.labels[s as usize] = mv.to;
-            }
-            part.parts[a] = mv.m_from;
-            part.parts[b] = mv.m_to;
+            cov.replace(old, new);
+            apply(part, mv);
             fits[a] = fa;
             fits[b] = fb;
             touched[a] = true;
@@ -349,9 +398,8 @@ pub fn relieve_worst(
     tov_tol: f64,
     mov_tol: f64,
 ) -> usize {
-    let g = &solid.grid;
     let total = solid.len() as f64;
-    let min_part = (solid.len() / (4 * part.k()).max(1)).max(8);
+    let min_part = min_part(solid, part);
     let mut moves = 0;
     for _ in 0..steps {
         let fits = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
@@ -372,71 +420,13 @@ pub fn relieve_worst(
             cov.add(&f.outside);
         }
         let cur_tov = cov.union as f64 / total;
-        let w32 = w as u32;
         // Layers between the worst part and each neighbour, both ways.
-        let mut layers: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
-        for s in 0..solid.len() {
-            let a = part.labels[s];
-            for &t in &g.neighbors[s] {
-                if t == NONE {
-                    continue;
-                }
-                let b = part.labels[t as usize];
-                if a != b && (a == w32 || b == w32) {
-                    let l = layers.entry((a, b)).or_default();
-                    if l.last() != Some(&(s as u32)) {
-                        l.push(s as u32);
-                    }
-                }
-            }
-        }
-        let mut cands: Vec<Move> = Vec::new();
-        for ((a, b), layer) in layers {
-            let n_from = part.parts[a as usize].n as usize;
-            if 2 * layer.len() > n_from || n_from - layer.len() < min_part {
-                continue;
-            }
-            let mut m_from = part.parts[a as usize];
-            let mut m_to = part.parts[b as usize];
-            for &s in &layer {
-                m_from.remove(solid.q[s as usize]);
-                m_to.add(solid.q[s as usize]);
-            }
-            cands.push(Move {
-                from: a,
-                to: b,
-                layer,
-                m_from,
-                m_to,
-            });
-        }
-        let members = part.members();
-        let enclosure = fitter.enclosure();
-        let work: Vec<(Moments, Vec<glam::DVec3>)> = crate::parallel::map(&cands, |mv| {
-            let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
-            let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
-            let from: Vec<u32> = members[mv.from as usize]
-                .iter()
-                .copied()
-                .filter(|&s| !in_layer(s as usize))
-                .collect();
-            let mut to = members[mv.to as usize].clone();
-            to.extend_from_slice(&mv.layer);
-            [
-                (
-                    mv.m_from,
-                    enclosure.points_with(mesh, solid, label_of, &from, mv.from),
-                ),
-                (
-                    mv.m_to,
-                    enclosure.points_with(mesh, solid, label_of, &to, mv.to),
-                ),
-            ]
-        })
-        .into_iter()
-        .flatten()
-        .collect();
-        fitter.fit_candidates(solid, work);
+        let w32 = w as u32;
+        let cands: Vec<Move> = layers(solid, part, |a, b| a == w32 || b == w32)
+            .into_iter()
+            .filter_map(|(pair, layer)| layer_move(solid, part, pair, layer, min_part))
+            .collect();
+        fit_moves(mesh, solid, fitter, part, &cands);
         let mut best: Option<(f64, usize)> = None;
         for (i, mv) in cands.iter().enumerate() {
             let (a, b) = (mv.from as usize, mv.to as usize);
@@ -450,15 +440,8 @@ pub fn relieve_worst(
             let mov = others
                 .max(fa.outside.len() as f64 / mv.m_from.n)
                 .max(fb.outside.len() as f64 / mv.m_to.n);
-            cov.remove(&fits[a].outside);
-            cov.remove(&fits[b].outside);
-            cov.add(&fa.outside);
-            cov.add(&fb.outside);
-            let tov = cov.union as f64 / total;
-            cov.remove(&fa.outside);
-            cov.remove(&fb.outside);
-            cov.add(&fits[a].outside);
-            cov.add(&fits[b].outside);
+            let old = [fits[a].outside.as_slice(), fits[b].outside.as_slice()];
+            let tov = cov.union_if(old, [&fa.outside, &fb.outside]) as f64 / total;
             if mov < cur_mov && tov < cur_tov.max(tov_tol) && best.is_none_or(|x| mov < x.0) {
                 best = Some((mov, i));
             }
@@ -470,11 +453,7 @@ pub fn relieve_worst(
         if !stays_connected(solid, comps, part, mv.from, &mv.layer) {
             break;
         }
-        for &s in &mv.layer {
-            part.labels[s as usize] = mv.to;
-        }
-        part.parts[mv.from as usize] = mv.m_from;
-        part.parts[mv.to as usize] = mv.m_to;
+        apply(part, mv);
         moves += 1;
     }
     moves
