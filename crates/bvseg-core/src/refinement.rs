@@ -38,7 +38,7 @@ use crate::{
 };
 
 /// Passes of the outside-volume tightening (see [`crate::tightening`]).
-pub const TIGHTEN_PASSES: usize = 12;
+pub const TIGHTEN_PASSES: usize = 40;
 
 /// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
 pub const RELIEVE_STEPS: usize = 40;
@@ -454,8 +454,8 @@ impl Segmenter {
         Some(self.evaluate(part))
     }
 
-    /// One merge; `None` when no merge helps (the phase has moved on).
-    fn merge(&mut self) -> Option<Step> {
+    /// The merge that lowers TOV most (keeping the tolerances if they are met), measured.
+    fn best_merge(&mut self) -> Option<State> {
         let cur = self.state.as_ref()?;
         let met = self.meets(cur);
         let cur_tov = cur.tov;
@@ -466,7 +466,12 @@ impl Segmenter {
             .into_iter()
             .filter(|&(tov, mov, _, _)| tov < cur_tov && (!met || (tov < tol_t && mov < tol_m)))
             .min_by(|x, y| x.0.total_cmp(&y.0).then((x.2, x.3).cmp(&(y.2, y.3))));
-        match best.and_then(|(_, _, a, b)| self.merged_state(a, b)) {
+        best.and_then(|(_, _, a, b)| self.merged_state(a, b))
+    }
+
+    /// One merge; `None` when no merge helps (the phase has moved on).
+    fn merge(&mut self) -> Option<Step> {
+        match self.best_merge() {
             Some(s) => Some(self.accept(StepKind::Merge, s)),
             None => {
                 self.phase = Phase::Final;

@@ -21,6 +21,9 @@ use crate::Mesh;
 /// current volume for the move to be tried.
 const REACH: f64 = 1.15;
 
+/// How many times the tightening judges every move (see [`tighten`]).
+const FULL_PASSES: usize = 3;
+
 /// A pass that lowers TOV by less than this ends the tightening.
 const MIN_PASS_GAIN: f64 = 1e-3;
 
@@ -286,7 +289,8 @@ fn apply(part: &mut Partition, mv: &Move) {
     part.parts[mv.to as usize] = mv.m_to;
 }
 
-/// Run up to `passes` passes of boundary-layer moves on `part`; returns the moves made.
+/// Run up to `passes` passes of boundary-layer moves on `part` (most of them cheap: see the
+/// comment on `last_gain`); returns the moves made.
 /// `mov_tol` is the per-part tolerance (sigma_L) a move may not push a part's OV past
 /// (unless that part was already past it).
 pub fn tighten(
@@ -306,9 +310,19 @@ pub fn tighten(
     }
     let mut moves = 0;
     let min_part = min_part(solid, part);
+    // Gain of each pair's move when last judged. A move that did not gain rarely starts to
+    // after a few moves elsewhere, so most passes judge again only the moves that gained (or
+    // are new). When that stalls, a full pass judges them all again, up to FULL_PASSES times.
+    let mut last_gain: HashMap<(u32, u32), i64> = HashMap::new();
+    let mut full = true;
+    let mut full_passes = 0;
     for _ in 0..passes {
+        full_passes += usize::from(full);
         let mut cands: Vec<Move> = Vec::new();
         for (pair, layer) in layers(solid, part, |_, _| true) {
+            if !full && last_gain.get(&pair).is_some_and(|&g| g <= 0) {
+                continue;
+            }
             // A layer that sticks far out of the receiving part's volume would make it grow
             // more than the giving part can shrink: not worth a refit.
             let to_volume = &fits[pair.1 as usize].volume;
@@ -334,6 +348,7 @@ pub fn tighten(
                 fits[mv.to as usize].outside.as_slice(),
             ];
             let gain = cov.union as i64 - cov.union_if(old, [&fa.outside, &fb.outside]) as i64;
+            last_gain.insert((mv.from, mv.to), gain);
             if gain > 0 {
                 scored.push((gain, i));
             }
@@ -378,7 +393,12 @@ pub fn tighten(
         // Stop when a pass gains less than MIN_PASS_GAIN of the solid's volume in TOV.
         let gain = union_before.saturating_sub(cov.union) as f64 / solid.len() as f64;
         if applied == 0 || gain < MIN_PASS_GAIN {
-            break;
+            if full || full_passes == FULL_PASSES {
+                break;
+            }
+            full = true;
+        } else {
+            full = false;
         }
     }
     moves
