@@ -102,8 +102,8 @@ fn vec(v: DVec3) -> [f64; 3] {
 /// (it must be the mesh whose triangles `seg.triangle_parts` labels).
 pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
     let mut b = Builder::default();
-    let sphere = b.unit(&unit_sphere(32));
-    let cube = b.unit(&unit_cube());
+    // Created on first use, so that a file with one kind of shape has no unused accessors.
+    let (mut sphere, mut cube) = (None, None);
     let hull = enclosing_sphere_hull(12);
 
     let mut materials = Vec::new();
@@ -126,8 +126,8 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
             "alphaMode": "BLEND", "doubleSided": true
         }));
         let (pos, nrm, idx) = match v.shape {
-            Shape::Ellipsoid => sphere,
-            Shape::Obb => cube,
+            Shape::Ellipsoid => *sphere.get_or_insert_with(|| b.unit(&unit_sphere(32))),
+            Shape::Obb => *cube.get_or_insert_with(|| b.unit(&unit_cube())),
         };
         meshes.push(json!({
             "name": format!("part_{i}"),
