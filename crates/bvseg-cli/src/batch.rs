@@ -218,7 +218,7 @@ fn process(
     args: &BatchArgs,
     params: &bvseg_core::Params,
 ) -> anyhow::Result<Row> {
-    let (name, loaded) = common::load(Some(path), &args.input, true)?;
+    let (name, loaded) = common::load_solid(Some(path), &args.input, true)?;
     // One file's steps would interleave with the others': no per-step display here.
     let seg =
         common::run_segmentation(&name, &loaded.mesh, params, None, &Progress::Quiet, |_| {})?;

@@ -181,6 +181,33 @@ pub fn load(
     Ok((name, loaded))
 }
 
+/// Whether the loaded surface encloses (next to) no volume, relative to its bounding box so
+/// that the test does not depend on units.
+pub fn encloses_no_volume(loaded: &LoadedMesh) -> bool {
+    let r = &loaded.report;
+    let size = r.bbox_max - r.bbox_min;
+    r.volume.abs() <= 1e-9 * size.max_element().powi(3)
+}
+
+/// Like [`load`], also refusing a mesh that encloses no volume, before any warning about
+/// it is printed: the user gets the one line that matters.
+pub fn load_solid(
+    path: Option<&Path>,
+    input: &InputArgs,
+    quiet: bool,
+) -> anyhow::Result<(String, LoadedMesh)> {
+    let (name, loaded) = load(path, input, quiet)?;
+    if encloses_no_volume(&loaded) {
+        let r = &loaded.report;
+        bail!(
+            "{name}: the mesh encloses no volume (flat, open or degenerate: {} triangles, {} open edges)",
+            r.triangles,
+            r.open_edges
+        );
+    }
+    Ok((name, loaded))
+}
+
 /// The load notes worth a warning line each.
 pub fn load_warnings(loaded: &LoadedMesh) -> Vec<String> {
     let s = loaded.stats;

@@ -26,9 +26,7 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<ExitCode> {
     let (name, loaded) = common::load(Some(&args.mesh), &args.input, true)?;
     let (s, r) = (loaded.stats, loaded.report);
     let mut warnings = common::load_warnings(&loaded);
-    let size = r.bbox_max - r.bbox_min;
-    // Relative to the bounding box, so that the test does not depend on units.
-    if r.volume.abs() <= 1e-9 * size.max_element().powi(3) {
+    if common::encloses_no_volume(&loaded) {
         warnings.push("encloses no volume (flat or open): it cannot be segmented".into());
     }
     if args.json {

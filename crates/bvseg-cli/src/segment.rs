@@ -57,7 +57,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     let params = args.params.params()?;
     check_outputs(args)?;
 
-    let (name, loaded) = common::load(args.mesh.as_deref(), &args.input, args.quiet)?;
+    let (name, loaded) = common::load_solid(args.mesh.as_deref(), &args.input, args.quiet)?;
     let warnings = common::load_warnings(&loaded);
     if !args.quiet {
         for w in &warnings {
