@@ -16,7 +16,11 @@ fn scratch(test: &str) -> PathBuf {
 }
 
 fn bvseg(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN).current_dir(dir).args(args).output().unwrap()
+    Command::new(BIN)
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -29,9 +33,29 @@ fn every_output_format_in_one_run() {
     let o = bvseg(
         &dir,
         &[
-            "segment", BUNNY, "--samples", "2000", "--k", "3", "--bv", "mixed", "-o", "v.json",
-            "-o", "v.glb", "-o", "v.xml", "-o", "v.obj", "--with-mesh", "--labels", "l.txt",
-            "--plot", "p.svg", "--json", "-q",
+            "segment",
+            BUNNY,
+            "--samples",
+            "2000",
+            "--k",
+            "3",
+            "--bv",
+            "mixed",
+            "-o",
+            "v.json",
+            "-o",
+            "v.glb",
+            "-o",
+            "v.xml",
+            "-o",
+            "v.obj",
+            "--with-mesh",
+            "--labels",
+            "l.txt",
+            "--plot",
+            "p.svg",
+            "--json",
+            "-q",
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
@@ -39,7 +63,10 @@ fn every_output_format_in_one_run() {
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(summary["k"], 3);
     assert_eq!(summary["triangles"], 3674);
-    assert!(summary["tolerances_met"].is_null(), "fixed k has no tolerances");
+    assert!(
+        summary["tolerances_met"].is_null(),
+        "fixed k has no tolerances"
+    );
     assert_eq!(summary["outputs"].as_array().unwrap().len(), 4);
 
     let doc: serde_json::Value =
@@ -52,10 +79,24 @@ fn every_output_format_in_one_run() {
     let geoms: Vec<_> = x.descendants().filter(|n| n.has_tag_name("geom")).collect();
     assert_eq!(geoms.len(), 3);
     for (g, v) in geoms.iter().zip(vols) {
-        let size: Vec<f64> = g.attribute("size").unwrap().split(' ').map(|s| s.parse().unwrap()).collect();
-        let radii: Vec<f64> = v["radii"].as_array().unwrap().iter().map(|r| r.as_f64().unwrap()).collect();
+        let size: Vec<f64> = g
+            .attribute("size")
+            .unwrap()
+            .split(' ')
+            .map(|s| s.parse().unwrap())
+            .collect();
+        let radii: Vec<f64> = v["radii"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r.as_f64().unwrap())
+            .collect();
         assert_eq!(size, radii);
-        let ty = if v["shape"] == "obb" { "box" } else { "ellipsoid" };
+        let ty = if v["shape"] == "obb" {
+            "box"
+        } else {
+            "ellipsoid"
+        };
         assert_eq!(g.attribute("type"), Some(ty));
     }
     // GLB: starts as one, has the three parts and the input mesh.
@@ -74,16 +115,35 @@ fn every_output_format_in_one_run() {
     assert_eq!(labels.lines().count(), 3674);
     assert!(labels.lines().all(|l| l.parse::<usize>().unwrap() < 3));
     let svg = fs::read_to_string(dir.join("p.svg")).unwrap();
-    assert!(svg.starts_with("<svg") && svg.contains("<polyline") && svg.trim_end().ends_with("</svg>"));
+    assert!(
+        svg.starts_with("<svg") && svg.contains("<polyline") && svg.trim_end().ends_with("</svg>")
+    );
     roxmltree::Document::parse(&svg).unwrap();
 }
 
 #[test]
 fn strict_exits_3_when_tolerances_are_not_met() {
     let dir = scratch("strict_exits_3_when_tolerances_are_not_met");
-    let args = ["segment", BUNNY, "--samples", "2000", "--max-k", "2", "--tov", "0.01", "--mov", "0.01", "--plot", "p.svg"];
+    let args = [
+        "segment",
+        BUNNY,
+        "--samples",
+        "2000",
+        "--max-k",
+        "2",
+        "--tov",
+        "0.01",
+        "--mov",
+        "0.01",
+        "--plot",
+        "p.svg",
+    ];
     let o = bvseg(&dir, &args);
-    assert!(o.status.success(), "without --strict only a warning: {}", stderr(&o));
+    assert!(
+        o.status.success(),
+        "without --strict only a warning: {}",
+        stderr(&o)
+    );
     assert!(stderr(&o).contains("warning: tolerances not met"));
     let svg = fs::read_to_string(dir.join("p.svg")).unwrap();
     assert!(svg.contains("TOV tolerance 0.01"), "tolerance lines drawn");
@@ -98,14 +158,35 @@ fn strict_exits_3_when_tolerances_are_not_met() {
 #[test]
 fn limits_and_output_checks_come_first() {
     let dir = scratch("limits_and_output_checks_come_first");
-    let o = bvseg(&dir, &["segment", BUNNY, "--max-triangles", "1000", "-o", "a.json"]);
+    let o = bvseg(
+        &dir,
+        &["segment", BUNNY, "--max-triangles", "1000", "-o", "a.json"],
+    );
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("3674 triangles is above --max-triangles 1000"), "{}", stderr(&o));
-    let o = bvseg(&dir, &["segment", BUNNY, "--samples", "200000", "--max-samples", "100000"]);
+    assert!(
+        stderr(&o).contains("3674 triangles is above --max-triangles 1000"),
+        "{}",
+        stderr(&o)
+    );
+    let o = bvseg(
+        &dir,
+        &[
+            "segment",
+            BUNNY,
+            "--samples",
+            "200000",
+            "--max-samples",
+            "100000",
+        ],
+    );
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("above --max-samples"), "{}", stderr(&o));
     let o = bvseg(&dir, &["segment", BUNNY, "-o", "a.json", "--with-mesh"]);
-    assert!(stderr(&o).contains("--with-mesh applies to a .glb output"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--with-mesh applies to a .glb output"),
+        "{}",
+        stderr(&o)
+    );
     let o = bvseg(&dir, &["segment", BUNNY, "--plot", "p.png"]);
     assert!(stderr(&o).contains("name the file .svg"), "{}", stderr(&o));
     let o = bvseg(&dir, &["segment", BUNNY, "-o", "a.json", "-o", "a.json"]);
@@ -149,7 +230,18 @@ fn batch_is_parallel_resumable_and_summarised() {
     fs::write(input.join("bunny.stl"), stl).unwrap();
     fs::write(input.join("broken.obj"), "v 0 0 0\n").unwrap();
     fs::write(input.join("notes.txt"), "not a mesh").unwrap();
-    let args = ["batch", "in", "-o", "out", "--samples", "2000", "--k", "2", "--formats", "json,xml"];
+    let args = [
+        "batch",
+        "in",
+        "-o",
+        "out",
+        "--samples",
+        "2000",
+        "--k",
+        "2",
+        "--formats",
+        "json,xml",
+    ];
     let o = bvseg(&dir, &args);
     assert_eq!(o.status.code(), Some(2), "one file failed: {}", stderr(&o));
     let mut outs: Vec<String> = fs::read_dir(dir.join("out"))
@@ -157,10 +249,22 @@ fn batch_is_parallel_resumable_and_summarised() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     outs.sort();
-    assert_eq!(outs, ["bunny.obj.json", "bunny.obj.xml", "bunny.stl.json", "bunny.stl.xml", "summary.csv"]);
+    assert_eq!(
+        outs,
+        [
+            "bunny.obj.json",
+            "bunny.obj.xml",
+            "bunny.stl.json",
+            "bunny.stl.xml",
+            "summary.csv"
+        ]
+    );
     let csv = fs::read_to_string(dir.join("out/summary.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().collect();
-    assert_eq!(rows[0], "file,status,triangles,k,tov,mov,tolerances_met,message");
+    assert_eq!(
+        rows[0],
+        "file,status,triangles,k,tov,mov,tolerances_met,message"
+    );
     assert!(rows[1].starts_with("broken.obj,error,"), "{csv}");
     assert!(rows[2].starts_with("bunny.obj,done,3674,2,"), "{csv}");
     assert!(rows[3].starts_with("bunny.stl,done,3674,2,"), "{csv}");
@@ -173,5 +277,9 @@ fn batch_is_parallel_resumable_and_summarised() {
     let o = bvseg(&dir, &args);
     let csv2 = fs::read_to_string(dir.join("out/summary.csv")).unwrap();
     assert!(csv2.contains("bunny.obj,skipped,,2,"), "{csv2}");
-    assert!(stderr(&o).contains("0 done, 2 skipped, 1 failed"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("0 done, 2 skipped, 1 failed"),
+        "{}",
+        stderr(&o)
+    );
 }
