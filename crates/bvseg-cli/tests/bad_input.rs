@@ -242,6 +242,7 @@ fn corpus() -> Vec<(String, Vec<u8>, &'static str)> {
         },
         "BIN chunk",
     );
+    add("cyclic_nodes.gltf", br#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"children":[1,1]},{"children":[0,0]}]}"#.to_vec(), "cyclic");
     // GLB headers that lie.
     let good = glb(&tri_gltf("", 36, 3, false), &bin);
     let mut short = good.clone();

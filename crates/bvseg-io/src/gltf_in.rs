@@ -16,6 +16,9 @@ use crate::{IoError, LoadedMesh, MAX_INPUT_BYTES};
 
 /// Deepest node nesting followed; deeper (or cyclic) hierarchies are refused.
 const MAX_DEPTH: usize = 256;
+/// Most node visits in one scene: a cycle through nodes with several children would
+/// otherwise be walked an exponential number of times before reaching [`MAX_DEPTH`].
+const MAX_NODE_VISITS: usize = 1_000_000;
 
 fn err(name: &str, message: impl Into<String>) -> IoError {
     IoError::Parse {
@@ -62,11 +65,16 @@ pub(crate) fn read_gltf(
     let mut stack: Vec<(gltf::Node, DMat4, usize)> =
         scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
     stack.reverse();
+    let mut visits = 0usize;
     while let Some((node, parent, depth)) = stack.pop() {
-        if depth > MAX_DEPTH {
+        visits += 1;
+        if depth > MAX_DEPTH || visits > MAX_NODE_VISITS {
             return Err(err(
                 name,
-                format!("the node hierarchy is deeper than {MAX_DEPTH} levels (or cyclic)"),
+                format!(
+                    "the node hierarchy is cyclic, or deeper than {MAX_DEPTH} levels, or has \
+                     more than {MAX_NODE_VISITS} node instances"
+                ),
             ));
         }
         let world = parent * local_matrix(&node);
