@@ -36,7 +36,8 @@ pub struct SegmentArgs {
     #[arg(long)]
     pub with_mesh: bool,
 
-    /// Write one part index per triangle of the (welded) mesh to this text file.
+    /// Write one part index per triangle of the file to this text file (-1 for triangles
+    /// dropped as degenerate).
     #[arg(long, value_name = "FILE.txt")]
     pub labels: Option<PathBuf>,
 
@@ -79,7 +80,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
         write_output(out, &seg, &options)?;
     }
     if let Some(path) = &args.labels {
-        write_labels(path, &seg)?;
+        write_labels(path, &seg, &loaded.dropped)?;
     }
     if let Some(path) = &args.plot {
         let svg = crate::plot::svg(&seg, &params, &name);

@@ -283,3 +283,47 @@ fn batch_is_parallel_resumable_and_summarised() {
         stderr(&o)
     );
 }
+
+#[test]
+fn labels_follow_the_file_triangles() {
+    let dir = scratch("labels_follow_the_file_triangles");
+    // The bunny with a degenerate triangle (a repeated corner) in second place.
+    let text = fs::read_to_string(BUNNY).unwrap();
+    let mut out = String::new();
+    let mut faces = 0;
+    for line in text.lines() {
+        out += line;
+        out += "\n";
+        if line.starts_with("f ") {
+            faces += 1;
+            if faces == 1 {
+                out += "f 1 1 2\n";
+            }
+        }
+    }
+    fs::write(dir.join("b.obj"), out).unwrap();
+    let o = bvseg(
+        &dir,
+        &[
+            "segment",
+            "b.obj",
+            "--samples",
+            "2000",
+            "--k",
+            "2",
+            "--labels",
+            "l.txt",
+            "-q",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let labels: Vec<i64> = fs::read_to_string(dir.join("l.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    assert_eq!(labels.len(), 3675);
+    assert_eq!(labels[1], -1);
+    assert_eq!(labels.iter().filter(|&&l| l == -1).count(), 1);
+    assert!(labels.iter().all(|&l| (-1..2).contains(&l)));
+}

@@ -42,6 +42,10 @@ pub struct LoadedMesh {
     pub stats: LoadStats,
     /// What the user should know about the mesh (pieces, holes, volume, ...).
     pub report: MeshReport,
+    /// Indices, among the triangles read (after fanning polygons), of those dropped as
+    /// degenerate, in increasing order: with them, per-triangle results can be mapped back
+    /// to the file's triangles.
+    pub dropped: Vec<usize>,
 }
 
 /// What loading changed, so that a front end can tell the user.
@@ -87,10 +91,13 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
     let (vertices, remap) = weld(&positions);
     let welded = vertices_read - vertices.len();
     let mut tris = Vec::with_capacity(triangles.len());
-    for t in &triangles {
+    let mut dropped = Vec::new();
+    for (k, t) in triangles.iter().enumerate() {
         let [a, b, c] = t.map(|i| remap[i]);
         if a != b && b != c && a != c {
             tris.push([a, b, c]);
+        } else {
+            dropped.push(k);
         }
     }
     let degenerate = triangles_read - tris.len();
@@ -127,6 +134,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
             degenerate,
         },
         report,
+        dropped,
     })
 }
 

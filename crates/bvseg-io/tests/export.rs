@@ -242,4 +242,6 @@ fn write_output_picks_the_format_and_refuses_others() {
     );
     assert!(!dir.join("a.ply").exists());
     assert_eq!(to_labels(&seg), "0\n1\n");
+    let with = bvseg_io::export::to_labels_with_dropped(&seg, &[0, 2, 4]);
+    assert_eq!(with, "-1\n0\n-1\n1\n-1\n");
 }

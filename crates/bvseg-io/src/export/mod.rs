@@ -86,15 +86,33 @@ pub fn write_output(
 
 /// One part index per triangle of the segmented mesh, one per line.
 pub fn to_labels(seg: &Segmentation) -> String {
-    let mut s = String::with_capacity(seg.triangle_parts.len() * 3);
-    for p in &seg.triangle_parts {
-        s.push_str(&p.to_string());
-        s.push('\n');
+    to_labels_with_dropped(seg, &[])
+}
+
+/// One line per triangle of the file: its part index, or `-1` for a triangle that loading
+/// dropped as degenerate (`dropped`: their indices among the triangles read, increasing, as
+/// in [`crate::LoadedMesh::dropped`]).
+pub fn to_labels_with_dropped(seg: &Segmentation, dropped: &[usize]) -> String {
+    let mut s = String::with_capacity((seg.triangle_parts.len() + dropped.len()) * 3);
+    let mut parts = seg.triangle_parts.iter();
+    let mut dropped = dropped.iter().peekable();
+    let total = seg.triangle_parts.len() + dropped.len();
+    for k in 0..total {
+        if dropped.next_if(|&&d| d == k).is_some() {
+            s.push_str("-1\n");
+        } else if let Some(p) = parts.next() {
+            s.push_str(&p.to_string());
+            s.push('\n');
+        }
     }
     s
 }
 
-/// Writes [`to_labels`] to `path`, atomically.
-pub fn write_labels(path: impl AsRef<Path>, seg: &Segmentation) -> Result<(), IoError> {
-    write_atomic(path, to_labels(seg).as_bytes())
+/// Writes [`to_labels_with_dropped`] to `path`, atomically.
+pub fn write_labels(
+    path: impl AsRef<Path>,
+    seg: &Segmentation,
+    dropped: &[usize],
+) -> Result<(), IoError> {
+    write_atomic(path, to_labels_with_dropped(seg, dropped).as_bytes())
 }
