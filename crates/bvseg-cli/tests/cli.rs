@@ -197,31 +197,26 @@ fn garbage_mesh_fails_cleanly() {
 
     fs::write(dir.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let o = segment(&dir, &["flat.obj", "-o", "out.json"]);
-    // Rejected by the core (no volume) once it lands; the placeholder accepts it.
-    if !o.status.success() {
-        assert_fails(&o, "flat.obj: ");
-    }
-
-    let mut expected = vec!["bad.obj", "binary.obj", "flat.obj", "garbage.obj"];
-    if o.status.success() {
-        expected.push("out.json");
-    }
-    assert_eq!(files(&dir), expected);
+    assert_fails(&o, "flat.obj: the mesh encloses no volume");
+    assert_eq!(
+        files(&dir),
+        ["bad.obj", "binary.obj", "flat.obj", "garbage.obj"]
+    );
 }
 
 #[test]
 fn unsupported_formats_fail_cleanly() {
     let dir = scratch("unsupported_formats_fail_cleanly");
-    fs::write(dir.join("part.stl"), "solid x\nendsolid x\n").unwrap();
-    let o = segment(&dir, &["part.stl", "-o", "out.json"]);
-    assert_fails(&o, "part.stl: unsupported mesh format '.stl'");
+    fs::write(dir.join("part.ply"), "ply\n").unwrap();
+    let o = segment(&dir, &["part.ply", "-o", "out.json"]);
+    assert_fails(&o, "part.ply: unsupported mesh format '.ply'");
 
     let o = segment(&dir, &["--k", "2", "-o", "out.ply"]);
     assert_fails(&o, "out.ply: unsupported output format '.ply'");
 
     let o = segment(&dir, &["--k", "2", "-o", "nodir/out.json"]);
     assert_fails(&o, "does not exist");
-    assert_eq!(files(&dir), ["part.stl"]);
+    assert_eq!(files(&dir), ["part.ply"]);
 }
 
 #[test]

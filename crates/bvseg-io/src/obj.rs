@@ -4,7 +4,6 @@
 //! polygons are fanned into triangles, and exactly coincident positions are welded so that a
 //! file that repeats positions (per object, or per face as some exporters do) still yields a
 //! closed surface.
-use std::collections::HashMap;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
@@ -12,34 +11,13 @@ use std::path::Path;
 use bvseg_core::Mesh;
 use glam::DVec3;
 
-use crate::IoError;
+use crate::finish::{finish, RawMesh};
+use crate::{IoError, LoadedMesh};
 
 /// Inputs larger than this are refused before parsing. The parser keeps every position and
 /// face in memory at several times its text size, so this keeps a stray multi-gigabyte file
 /// from exhausting memory.
 pub const MAX_INPUT_BYTES: u64 = 2 << 30;
-
-/// A loaded mesh with what was changed on the way in, for the caller to report.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LoadedMesh {
-    /// The welded, validated mesh.
-    pub mesh: Mesh,
-    /// What loading did to the file's data.
-    pub stats: LoadStats,
-}
-
-/// What loading changed, so that a front end can tell the user.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct LoadStats {
-    /// Vertices referenced by faces, before welding.
-    pub vertices_read: usize,
-    /// Vertices removed by welding exactly coincident positions.
-    pub welded: usize,
-    /// Triangles read, after fanning polygons.
-    pub triangles_read: usize,
-    /// Triangles dropped because two of their corners are the same vertex after welding.
-    pub degenerate: usize,
-}
 
 /// Load an OBJ file; see [`load_obj_detailed`].
 pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, IoError> {
@@ -52,12 +30,12 @@ pub fn load_obj_detailed(path: impl AsRef<Path>) -> Result<LoadedMesh, IoError> 
     let path = path.as_ref();
     let name = path.display().to_string();
     let file = open_input(path, &name)?;
-    read_obj(BufReader::new(file), &name)
+    read_obj(BufReader::new(file), &name, None)
 }
 
 /// Load an OBJ file from a reader; `name` is what error messages call it.
 pub fn load_obj_from_reader(reader: impl Read, name: &str) -> Result<Mesh, IoError> {
-    read_obj(BufReader::new(reader), name).map(|l| l.mesh)
+    read_obj(BufReader::new(reader), name, None).map(|l| l.mesh)
 }
 
 /// Load an OBJ file held in memory; `name` is what error messages call it.
@@ -67,7 +45,7 @@ pub fn load_obj_from_bytes(bytes: &[u8], name: &str) -> Result<Mesh, IoError> {
 
 /// Like [`load_obj_from_bytes`], also returning what loading changed.
 pub fn load_obj_from_bytes_detailed(bytes: &[u8], name: &str) -> Result<LoadedMesh, IoError> {
-    read_obj(bytes, name)
+    read_obj(bytes, name, None)
 }
 
 /// Opens `path` for reading, refusing directories and files over [`MAX_INPUT_BYTES`] up front
@@ -90,7 +68,11 @@ pub(crate) fn open_input(path: &Path, name: &str) -> Result<File, IoError> {
     Ok(file)
 }
 
-fn read_obj(reader: impl BufRead, name: &str) -> Result<LoadedMesh, IoError> {
+pub(crate) fn read_obj(
+    reader: impl BufRead,
+    name: &str,
+    object: Option<&str>,
+) -> Result<LoadedMesh, IoError> {
     let mut lines = PositionLines::new(reader, MAX_INPUT_BYTES);
     // The struct update is needed when another crate in the build enables tobj's `merging`
     // or `reordering` features, which add fields.
@@ -111,92 +93,53 @@ fn read_obj(reader: impl BufRead, name: &str) -> Result<LoadedMesh, IoError> {
         Err(e) => return Err(parse_error(e, &lines, name)),
     };
 
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
+    let mut raw = RawMesh::default();
+    let mut found = object.is_none();
     for model in &models {
+        if object.is_some_and(|o| o != model.name) {
+            continue;
+        }
+        found = true;
         let m = &model.mesh;
-        let base = positions.len();
-        positions.extend(
+        let base = raw.positions.len();
+        raw.positions.extend(
             m.positions
                 .chunks_exact(3)
                 .map(|p| DVec3::new(p[0], p[1], p[2])),
         );
         for t in m.indices.chunks_exact(3) {
-            triangles.push([0, 1, 2].map(|j| base + t[j] as usize));
+            raw.triangles.push([0, 1, 2].map(|j| base + t[j] as usize));
         }
     }
-    if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+    if let (false, Some(object)) = (found, object) {
         return Err(IoError::Parse {
             name: name.to_owned(),
             line: None,
             message: format!(
-                "a vertex has a non-finite coordinate ({} {} {})",
-                p.x, p.y, p.z
+                "no object or group named '{object}' (the file has: {})",
+                name_list(models.iter().map(|m| m.name.as_str()))
             ),
         });
     }
-    // Indices become u32 in the mesh; a file within the size limit cannot exceed that, but an
-    // in-memory reader is not bound by a file system.
-    if positions.len() > u32::MAX as usize {
-        return Err(IoError::Parse {
-            name: name.to_owned(),
-            line: None,
-            message: "too many vertices (more than 2^32)".into(),
-        });
-    }
-
-    let vertices_read = positions.len();
-    let triangles_read = triangles.len();
-    let (vertices, remap) = weld(&positions);
-    let welded = vertices_read - vertices.len();
-    let mut tris = Vec::with_capacity(triangles.len());
-    for t in &triangles {
-        let [a, b, c] = t.map(|i| remap[i]);
-        if a != b && b != c && a != c {
-            tris.push([a, b, c]);
-        }
-    }
-    let degenerate = triangles_read - tris.len();
-    if tris.is_empty() {
-        return Err(IoError::NoTriangles {
-            name: name.to_owned(),
-            degenerate,
-        });
-    }
-    let mesh = Mesh::new(vertices, tris).map_err(|source| IoError::Mesh {
-        name: name.to_owned(),
-        source,
-    })?;
-    Ok(LoadedMesh {
-        mesh,
-        stats: LoadStats {
-            vertices_read,
-            welded,
-            triangles_read,
-            degenerate,
-        },
-    })
+    finish(raw, name)
 }
 
-/// Merges vertices whose coordinates are bit-identical (with -0.0 taken as 0.0), keeping the
-/// first occurrence and the order of first occurrences, so that the result does not depend on
-/// hashing. Returns the vertices and, for each input vertex, its new index.
-fn weld(positions: &[DVec3]) -> (Vec<DVec3>, Vec<u32>) {
-    // Adding 0.0 turns -0.0 into +0.0 and leaves every other value unchanged.
-    let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
-    let mut index: HashMap<[u64; 3], u32> = HashMap::with_capacity(positions.len());
-    let mut vertices = Vec::with_capacity(positions.len());
-    let remap = positions
-        .iter()
-        .map(|&p| {
-            *index.entry(key(p)).or_insert_with(|| {
-                vertices.push(p);
-                // Bounded by the caller's check that there are at most 2^32 positions.
-                (vertices.len() - 1) as u32
-            })
-        })
-        .collect();
-    (vertices, remap)
+/// The first few distinct names, quoted, for an error message.
+pub(crate) fn name_list<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let mut seen: Vec<&str> = Vec::new();
+    for n in names {
+        if !seen.contains(&n) {
+            seen.push(n);
+        }
+    }
+    if seen.is_empty() {
+        return "none".into();
+    }
+    let mut s: Vec<String> = seen.iter().take(10).map(|n| format!("'{n}'")).collect();
+    if seen.len() > 10 {
+        s.push(format!("and {} more", seen.len() - 10));
+    }
+    s.join(", ")
 }
 
 /// Turns a `tobj` error into a one-line message, with the line number where it is known.
@@ -347,7 +290,7 @@ impl<R: BufRead> Read for PositionLines<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::collections::HashSet;
+    use std::collections::{HashMap, HashSet};
 
     fn load(text: &str) -> Result<LoadedMesh, IoError> {
         load_obj_from_bytes_detailed(text.as_bytes(), "t.obj")

@@ -57,13 +57,13 @@ fn load_errors_name_the_file_in_one_line() {
         "{msg}"
     );
 
-    let stl = dir.join("part.stl");
-    fs::write(&stl, "solid x\nendsolid x\n").unwrap();
+    let stl = dir.join("part.ply");
+    fs::write(&stl, "ply\n").unwrap();
     let msg = load_mesh(&stl).unwrap_err().to_string();
     assert_eq!(
         msg,
         format!(
-            "{}: unsupported mesh format '.stl' (supported: .obj)",
+            "{}: unsupported mesh format '.ply' (supported: .obj, .gltf, .glb, .stl)",
             stl.display()
         )
     );
@@ -72,7 +72,9 @@ fn load_errors_name_the_file_in_one_line() {
     fs::write(&bare, "hello").unwrap();
     let msg = load_mesh(&bare).unwrap_err().to_string();
     assert!(
-        msg.ends_with("unsupported mesh format (no file extension) (supported: .obj)"),
+        msg.ends_with(
+            "unsupported mesh format (no file extension) (supported: .obj, .gltf, .glb, .stl)"
+        ),
         "{msg}"
     );
 

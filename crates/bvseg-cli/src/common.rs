@@ -1,0 +1,354 @@
+//! What the subcommands share: the segmentation options, loading a mesh with its report,
+//! running the segmentation with progress, and error formatting.
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, bail};
+use bvseg_core::{BoundingKind, Mesh, Params, Segmentation, Segmenter, Step};
+use bvseg_io::{LoadOptions, LoadedMesh};
+use clap::{Args, ValueEnum};
+
+use crate::progress::Progress;
+
+/// The mesh used when none is given, as it sits in the source tree.
+const BUNDLED_MESH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
+/// How messages name the bundled mesh (the absolute source path would only confuse).
+const BUNDLED_NAME: &str = "assets/meshes/bunny.obj";
+/// The same mesh compiled in, so that an installed binary works away from the source tree.
+const BUNDLED_BYTES: &[u8] = include_bytes!("../../../assets/meshes/bunny.obj");
+
+/// Default of `--max-triangles`: beyond it a run takes minutes and gigabytes.
+pub const DEFAULT_MAX_TRIANGLES: usize = 5_000_000;
+/// Default of `--max-samples`.
+pub const DEFAULT_MAX_SAMPLES: usize = 5_000_000;
+
+/// Which part of the file to read, and how large it may be.
+#[derive(Args, Debug, Clone, Default)]
+pub struct InputArgs {
+    /// OBJ: segment only the object or group with this name.
+    #[arg(long, value_name = "NAME")]
+    pub object: Option<String>,
+
+    /// glTF/GLB: segment only the scene nodes whose mesh has this name.
+    #[arg(long = "mesh", value_name = "NAME")]
+    pub mesh_name: Option<String>,
+
+    /// Refuse meshes with more triangles than this.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_TRIANGLES)]
+    pub max_triangles: usize,
+}
+
+/// The segmentation's parameters.
+#[derive(Args, Debug, Clone)]
+pub struct ParamArgs {
+    /// Exactly this many parts, instead of refining until the tolerances hold.
+    #[arg(long, value_name = "K", conflicts_with_all = ["tov", "mov"])]
+    pub k: Option<usize>,
+
+    /// Tolerance on the total outside volume TOV (relative to the mesh's volume).
+    #[arg(long, value_name = "T", default_value_t = Params::default().tov)]
+    pub tov: f64,
+
+    /// Tolerance on the largest per-part outside volume MOV.
+    #[arg(long, value_name = "M", default_value_t = Params::default().mov)]
+    pub mov: f64,
+
+    /// Largest number of parts the tolerance loop may reach.
+    #[arg(long, value_name = "N", default_value_t = Params::default().max_k)]
+    pub max_k: usize,
+
+    /// Bounding volume of each part (mixed: whichever of the two is smaller).
+    #[arg(long = "bv", value_enum, default_value_t = Bv::Ellipsoid)]
+    pub bv: Bv,
+
+    /// Target number of interior samples.
+    #[arg(long, value_name = "N", default_value_t = Params::default().samples)]
+    pub samples: usize,
+
+    /// Refuse a --samples above this (memory and time grow with it).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SAMPLES)]
+    pub max_samples: usize,
+
+    /// Seed of the initialisation; equal seeds give identical results.
+    #[arg(long, value_name = "S", default_value_t = Params::default().seed)]
+    pub seed: u64,
+
+    /// Number of worker threads (default: one per core). The result does not depend on it.
+    #[arg(long, value_name = "T", value_parser = clap::value_parser!(u64).range(1..=4096))]
+    pub threads: Option<u64>,
+
+    /// Do not merge adjacent parts at the end of the tolerance loop.
+    #[arg(long)]
+    pub no_merge: bool,
+
+    /// Do not polish part boundaries to lower the outside volume.
+    #[arg(long)]
+    pub no_polish: bool,
+
+    /// Exit with code 3 when the tolerances are not met within --max-k.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bv {
+    Ellipsoid,
+    Obb,
+    Mixed,
+}
+
+impl From<Bv> for BoundingKind {
+    fn from(bv: Bv) -> Self {
+        match bv {
+            Bv::Ellipsoid => BoundingKind::Ellipsoid,
+            Bv::Obb => BoundingKind::Obb,
+            Bv::Mixed => BoundingKind::Mixed,
+        }
+    }
+}
+
+impl ParamArgs {
+    /// The core's parameters, validated, and within `--max-samples`.
+    pub fn params(&self) -> anyhow::Result<Params> {
+        if self.samples > self.max_samples {
+            bail!(
+                "--samples {} is above --max-samples {}; raise --max-samples if you mean it",
+                self.samples,
+                self.max_samples
+            );
+        }
+        let params = Params {
+            samples: self.samples,
+            seed: self.seed,
+            bounding: self.bv.into(),
+            k: self.k,
+            tov: self.tov,
+            mov: self.mov,
+            max_k: self.max_k,
+            merge: !self.no_merge,
+            polish: !self.no_polish,
+            ..Params::default()
+        };
+        params.validate()?;
+        Ok(params)
+    }
+}
+
+/// Whether a tolerance-mode run met its tolerances (`None` with a fixed k).
+pub fn tolerances_met(seg: &Segmentation, params: &Params) -> Option<bool> {
+    let m = seg.metrics;
+    params
+        .k
+        .is_none()
+        .then_some(m.tov < params.tov && m.mov < params.mov)
+}
+
+/// Loads `path` (or the bundled mesh), enforcing `--max-triangles`. Returns the name
+/// messages use and the mesh with its report.
+pub fn load(
+    path: Option<&Path>,
+    input: &InputArgs,
+    quiet: bool,
+) -> anyhow::Result<(String, LoadedMesh)> {
+    let options = LoadOptions {
+        object: input.object.clone(),
+        mesh: input.mesh_name.clone(),
+    };
+    let (name, loaded) = match path {
+        Some(path) => (
+            path.display().to_string(),
+            bvseg_io::load_mesh_with(path, &options)?,
+        ),
+        None => {
+            if !quiet {
+                eprintln!("bvseg: no mesh given; using the bundled {BUNDLED_NAME}");
+            }
+            let loaded = if Path::new(BUNDLED_MESH).is_file() {
+                bvseg_io::load_mesh_with(BUNDLED_MESH, &options)
+            } else {
+                bvseg_io::load_mesh_from_bytes_with(BUNDLED_BYTES, BUNDLED_NAME, &options)
+            };
+            (BUNDLED_NAME.to_owned(), loaded?)
+        }
+    };
+    let n = loaded.mesh.triangles().len();
+    if n > input.max_triangles {
+        bail!(
+            "{name}: {n} triangles is above --max-triangles {}; raise it to proceed \
+             (or decimate the mesh)",
+            input.max_triangles
+        );
+    }
+    Ok((name, loaded))
+}
+
+/// Whether the loaded surface encloses (next to) no volume, relative to its bounding box so
+/// that the test does not depend on units.
+pub fn encloses_no_volume(loaded: &LoadedMesh) -> bool {
+    let r = &loaded.report;
+    let size = r.bbox_max - r.bbox_min;
+    r.volume.abs() <= 1e-9 * size.max_element().powi(3)
+}
+
+/// Like [`load`], also refusing a mesh that encloses no volume, before any warning about
+/// it is printed: the user gets the one line that matters.
+pub fn load_solid(
+    path: Option<&Path>,
+    input: &InputArgs,
+    quiet: bool,
+) -> anyhow::Result<(String, LoadedMesh)> {
+    let (name, loaded) = load(path, input, quiet)?;
+    if encloses_no_volume(&loaded) {
+        let r = &loaded.report;
+        bail!(
+            "{name}: the mesh encloses no volume (flat, open or degenerate: {} triangles, {} open edges)",
+            r.triangles,
+            r.open_edges
+        );
+    }
+    Ok((name, loaded))
+}
+
+/// The load notes worth a warning line each.
+pub fn load_warnings(loaded: &LoadedMesh) -> Vec<String> {
+    let s = loaded.stats;
+    let mut w = Vec::new();
+    if s.welded > 0 || s.degenerate > 0 {
+        w.push(format!(
+            "welded {} coincident vertices, dropped {} degenerate triangles",
+            s.welded, s.degenerate
+        ));
+    }
+    w.extend(loaded.report.warnings());
+    w
+}
+
+/// Runs the segmentation with progress display, in a pool of `threads` when given.
+pub fn run_segmentation(
+    name: &str,
+    mesh: &Mesh,
+    params: &Params,
+    threads: Option<u64>,
+    progress: &Progress,
+    on_step: impl FnMut(&Step) + Send,
+) -> anyhow::Result<Segmentation> {
+    let work = || -> anyhow::Result<Segmentation> {
+        let mut on_step = on_step;
+        progress.sampling();
+        let mut seg = Segmenter::new(mesh, params).map_err(|e| anyhow!("{name}: {e}"))?;
+        progress.refining(params);
+        while let Some(step) = seg.step() {
+            progress.step(&step);
+            on_step(&step);
+        }
+        progress.done();
+        Ok(seg.finish())
+    };
+    in_pool(threads, work)
+}
+
+#[cfg(feature = "parallel")]
+pub fn in_pool<T: Send>(
+    threads: Option<u64>,
+    work: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> anyhow::Result<T> {
+    let Some(threads) = threads else {
+        return work();
+    };
+    use anyhow::Context;
+    let pool = rayon::ThreadPoolBuilder::new()
+        // Bounded to 4096 by the argument parser.
+        .num_threads(threads as usize)
+        .build()
+        .with_context(|| format!("cannot start {threads} threads"))?;
+    pool.install(work)
+}
+
+#[cfg(not(feature = "parallel"))]
+pub fn in_pool<T: Send>(
+    _threads: Option<u64>,
+    work: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> anyhow::Result<T> {
+    work()
+}
+
+/// Checks that `out` can be written: a known format (when `check_format`) in an existing
+/// directory. Done before the run, so that a typo does not cost the whole run.
+pub fn check_output(out: &Path, check_format: bool) -> anyhow::Result<()> {
+    if check_format {
+        bvseg_io::export::OutputFormat::from_path(out)?;
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            bail!(
+                "{}: the directory {} does not exist",
+                out.display(),
+                dir.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The error and its causes on one line. Our errors often already quote their cause (an
+/// `IoError` names the OS error it wraps), so a cause already in the text is not repeated.
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg.push_str(": ");
+            msg.push_str(&c);
+        }
+    }
+    msg.replace(['\n', '\r'], " ")
+}
+
+/// Paths as strings for JSON and CSV.
+pub fn shown(p: &[PathBuf]) -> Vec<String> {
+    p.iter().map(|p| p.display().to_string()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bvseg_io::IoError;
+
+    #[test]
+    fn embedded_mesh_equals_the_file() {
+        let disk = bvseg_io::load_obj(BUNDLED_MESH).unwrap();
+        let embedded = bvseg_io::load_obj_from_bytes(BUNDLED_BYTES, BUNDLED_NAME).unwrap();
+        assert_eq!(disk, embedded);
+    }
+
+    #[test]
+    fn causes_are_not_repeated() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
+        let e: anyhow::Error = IoError::Io {
+            name: "a.obj".into(),
+            action: "open",
+            source: io,
+        }
+        .into();
+        assert_eq!(one_line(&e), "a.obj: cannot open: gone");
+        let e = anyhow!("multi\nline").context("outer");
+        assert_eq!(one_line(&e), "outer: multi line");
+    }
+
+    #[test]
+    fn outputs_are_checked_before_the_run() {
+        assert!(check_output(Path::new("out.json"), true).is_ok());
+        assert!(check_output(Path::new("OUT.GLB"), true).is_ok());
+        assert!(check_output(Path::new("m.xml"), true).is_ok());
+        let e = check_output(Path::new("out.ply"), true)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "out.ply: unsupported output format '.ply' (supported: .json, .glb, .xml (MJCF), .obj)"
+        );
+        let e = check_output(Path::new("no/such/dir/out.json"), true)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("does not exist"), "{e}");
+    }
+}

@@ -1,0 +1,302 @@
+//! `bvseg segment`: one mesh in, the volumes out in every format asked for.
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use bvseg_core::{Params, Segmentation};
+use bvseg_io::export::{write_labels, write_output, ExportOptions, OutputFormat};
+use bvseg_io::LoadedMesh;
+use clap::Args;
+use serde_json::json;
+
+use crate::common::{self, InputArgs, ParamArgs};
+use crate::progress::Progress;
+use crate::EXIT_TOLERANCE;
+
+#[derive(Args, Debug)]
+pub struct SegmentArgs {
+    /// Mesh file (.obj, .gltf, .glb, .stl). Without it, the bundled Stanford bunny is used.
+    #[arg(value_name = "MESH")]
+    pub mesh: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub input: InputArgs,
+
+    #[command(flatten)]
+    pub params: ParamArgs,
+
+    /// Write the volumes here; the extension picks the format: .json (bvseg.volumes/1),
+    /// .glb (glTF with colliders), .xml (MuJoCo MJCF), .obj (proxy meshes). Repeatable.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Vec<PathBuf>,
+
+    /// GLB output: also include the input mesh, with vertex colours by part.
+    #[arg(long)]
+    pub with_mesh: bool,
+
+    /// Write one part index per triangle of the file to this text file (-1 for triangles
+    /// dropped as degenerate).
+    #[arg(long, value_name = "FILE.txt")]
+    pub labels: Option<PathBuf>,
+
+    /// Plot TOV and MOV against k over the refinement, with the tolerances, as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+
+    /// Print a machine-readable summary (JSON) on stdout instead of the text one.
+    #[arg(long)]
+    pub json: bool,
+
+    /// Print nothing on stderr but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
+    let params = args.params.params()?;
+    check_outputs(args)?;
+
+    let (name, loaded) = common::load_solid(args.mesh.as_deref(), &args.input, args.quiet)?;
+    let warnings = common::load_warnings(&loaded);
+    if !args.quiet {
+        for w in &warnings {
+            eprintln!("bvseg: warning: {name}: {w}");
+        }
+    }
+    let LoadedMesh { mesh, .. } = &loaded;
+
+    let start = Instant::now();
+    let progress = Progress::new(args.quiet);
+    let seg =
+        common::run_segmentation(&name, mesh, &params, args.params.threads, &progress, |_| {})?;
+    let seconds = start.elapsed().as_secs_f64();
+
+    let options = ExportOptions {
+        mesh: args.with_mesh.then_some(mesh),
+    };
+    for out in &args.output {
+        write_output(out, &seg, &options)?;
+    }
+    if let Some(path) = &args.labels {
+        write_labels(path, &seg, &loaded.dropped)?;
+    }
+    if let Some(path) = &args.plot {
+        let svg = crate::plot::svg(&seg, &params, &name);
+        bvseg_io::write_atomic(path, svg.as_bytes())?;
+    }
+
+    let met = common::tolerances_met(&seg, &params);
+    if args.json {
+        print_json(
+            &name,
+            &loaded,
+            &seg,
+            &params,
+            seconds,
+            &args.output,
+            &warnings,
+        )?;
+    } else {
+        print_summary(&name, &loaded, &seg, seconds, &args.output)?;
+    }
+    if met == Some(false) {
+        let m = seg.metrics;
+        if args.params.strict {
+            eprintln!(
+                "bvseg: error: {name}: tolerances not met at k = {} (TOV {:.3} vs {}, MOV {:.3} vs {})",
+                m.k, m.tov, params.tov, m.mov, params.mov
+            );
+            return Ok(ExitCode::from(EXIT_TOLERANCE));
+        }
+        if !args.quiet {
+            eprintln!(
+                "bvseg: warning: tolerances not met at k = {} (TOV {:.3} vs {}, MOV {:.3} vs {}); \
+                 raise --max-k or the tolerances, or see BENCHMARKS.md on MOV",
+                m.k, m.tov, params.tov, m.mov, params.mov
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Every output checked before the (possibly long) run.
+fn check_outputs(args: &SegmentArgs) -> anyhow::Result<()> {
+    for out in &args.output {
+        common::check_output(out, true)?;
+    }
+    let glb = args
+        .output
+        .iter()
+        .any(|o| matches!(OutputFormat::from_path(o), Ok(OutputFormat::Glb)));
+    if args.with_mesh && !glb {
+        bail!("--with-mesh applies to a .glb output; none was given with -o");
+    }
+    if let Some(l) = &args.labels {
+        common::check_output(l, false)?;
+    }
+    if let Some(p) = &args.plot {
+        if bvseg_io::extension(p).as_deref() != Some("svg") {
+            bail!("{}: --plot writes SVG; name the file .svg", p.display());
+        }
+        common::check_output(p, false)?;
+    }
+    let mut seen: Vec<&Path> = Vec::new();
+    let all = args.output.iter().chain(&args.labels).chain(&args.plot);
+    for p in all {
+        if seen.contains(&p.as_path()) {
+            bail!("{}: named twice as an output", p.display());
+        }
+        seen.push(p);
+    }
+    Ok(())
+}
+
+fn print_summary(
+    name: &str,
+    loaded: &LoadedMesh,
+    seg: &Segmentation,
+    seconds: f64,
+    outputs: &[PathBuf],
+) -> anyhow::Result<()> {
+    let m = &seg.metrics;
+    let written = if outputs.is_empty() {
+        "not written (use -o FILE.json, .glb, .xml or .obj)".to_owned()
+    } else {
+        common::shown(outputs).join(", ")
+    };
+    let text = format!(
+        "mesh       {name}\n\
+         triangles  {}\n\
+         samples    {}\n\
+         k          {} ({})\n\
+         F          {:.6}\n\
+         TOV        {:.6}\n\
+         MOV        {:.6}\n\
+         time       {seconds:.2} s\n\
+         output     {written}\n",
+        loaded.mesh.triangles().len(),
+        m.samples,
+        m.k,
+        seg.kind.as_str(),
+        m.f,
+        m.tov,
+        m.mov,
+    );
+    write_stdout(&text)
+}
+
+fn print_json(
+    name: &str,
+    loaded: &LoadedMesh,
+    seg: &Segmentation,
+    params: &Params,
+    seconds: f64,
+    outputs: &[PathBuf],
+    warnings: &[String],
+) -> anyhow::Result<()> {
+    let m = &seg.metrics;
+    let doc = json!({
+        "mesh": name,
+        "triangles": loaded.mesh.triangles().len(),
+        "kind": seg.kind.as_str(),
+        "k": m.k,
+        "f": m.f,
+        "tov": m.tov,
+        "mov": m.mov,
+        "samples": m.samples,
+        "tolerances": params.k.is_none().then(|| json!({"tov": params.tov, "mov": params.mov})),
+        "tolerances_met": common::tolerances_met(seg, params),
+        "seconds": seconds,
+        "outputs": common::shown(outputs),
+        "warnings": warnings,
+    });
+    write_stdout(&format!("{doc}\n"))
+}
+
+pub fn write_stdout(text: &str) -> anyhow::Result<()> {
+    // A closed stdout (e.g. `| head -1`) is not worth a panic, but is worth saying so.
+    std::io::stdout()
+        .lock()
+        .write_all(text.as_bytes())
+        .context("cannot write to stdout")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::common::Bv;
+    use crate::tests::parse_segment as parse;
+    use bvseg_core::BoundingKind;
+
+    #[test]
+    fn defaults_come_from_the_core() {
+        let a = parse(&[]).unwrap();
+        let d = Params::default();
+        let p = &a.params;
+        assert_eq!(
+            (p.tov, p.mov, p.max_k, p.samples, p.seed),
+            (d.tov, d.mov, d.max_k, d.samples, d.seed)
+        );
+        assert_eq!(BoundingKind::from(p.bv), d.bounding);
+        assert!(a.mesh.is_none() && p.k.is_none() && a.output.is_empty() && p.threads.is_none());
+    }
+
+    #[test]
+    fn k_conflicts_with_tolerances() {
+        assert!(parse(&["--k", "3"]).is_ok());
+        assert!(parse(&["--tov", "0.2", "--mov", "0.4"]).is_ok());
+        for extra in [["--tov", "0.2"], ["--mov", "0.4"]] {
+            let e = parse(&["--k", "3", extra[0], extra[1]]).unwrap_err();
+            assert_eq!(e.kind(), clap::error::ErrorKind::ArgumentConflict);
+            assert_eq!(e.exit_code(), 2);
+        }
+    }
+
+    #[test]
+    fn options_parse() {
+        let a = parse(&[
+            "m.obj",
+            "--bv",
+            "mixed",
+            "--threads",
+            "3",
+            "-o",
+            "x.json",
+            "-o",
+            "x.glb",
+            "--no-merge",
+            "--no-polish",
+            "-q",
+            "--samples",
+            "5000",
+            "--seed",
+            "7",
+            "--max-k",
+            "9",
+            "--strict",
+            "--json",
+            "--object",
+            "body",
+        ])
+        .unwrap();
+        assert_eq!(a.mesh.as_deref(), Some(Path::new("m.obj")));
+        let p = &a.params;
+        assert_eq!(p.bv, Bv::Mixed);
+        assert_eq!(p.threads, Some(3));
+        assert!(p.no_merge && p.no_polish && a.quiet && p.strict && a.json);
+        assert_eq!((p.samples, p.seed, p.max_k), (5000, 7, 9));
+        assert_eq!(a.output.len(), 2);
+        assert_eq!(a.input.object.as_deref(), Some("body"));
+        assert!(parse(&["--threads", "0"]).is_err());
+        assert!(parse(&["--bv", "sphere"]).is_err());
+    }
+
+    #[test]
+    fn sample_limit_is_enforced() {
+        let a = parse(&["--samples", "20000", "--max-samples", "10000"]).unwrap();
+        let e = a.params.params().unwrap_err().to_string();
+        assert!(e.contains("above --max-samples 10000"), "{e}");
+    }
+}

@@ -1,0 +1,260 @@
+//! glTF 2.0 binary output.
+//!
+//! Scene layout, under one root node `bvseg`:
+//! - `part_<i>`: the volume's translation, rotation and non-uniform scale (the radii) on a
+//!   unit sphere (ellipsoid) or the cube [-1, 1]^3 (box), coloured per part; `extras` hold
+//!   the exact parameters.
+//! - `part_<i>_collider`: translation and rotation only (physics engines want colliders
+//!   unscaled), with a `KHR_physics_rigid_bodies` collider: a `KHR_implicit_shapes` box of
+//!   the exact size for a box; for an ellipsoid, which those extensions cannot express, a
+//!   convex hull of a polyhedron that encloses it (referenced by node, outside the scene, so
+//!   that viewers do not draw it), with the exact ellipsoid in `extras`.
+//! - `input_mesh` (optional): the segmented mesh with vertex colours by part.
+use bvseg_core::{Mesh, Segmentation, Shape};
+use glam::DVec3;
+use serde_json::{json, Value};
+
+use super::proxy::{
+    enclosing_sphere_hull, part_color, unit_cube, unit_sphere, volume_rotation, UnitMesh,
+};
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_INT: u32 = 5125;
+
+/// Accumulates the binary chunk with its buffer views and accessors.
+#[derive(Default)]
+struct Builder {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Builder {
+    fn view(&mut self, bytes: &[u8], target: u32) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.views.push(json!({
+            "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len(), "target": target
+        }));
+        self.bin.extend_from_slice(bytes);
+        self.views.len() - 1
+    }
+
+    fn vec3(&mut self, data: &[DVec3], with_bounds: bool) -> usize {
+        let f: Vec<[f32; 3]> = data.iter().map(|p| p.as_vec3().to_array()).collect();
+        let bytes: Vec<u8> = f.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        let view = self.view(&bytes, ARRAY_BUFFER);
+        let mut acc = json!({
+            "bufferView": view, "componentType": FLOAT, "count": data.len(), "type": "VEC3"
+        });
+        if with_bounds {
+            // Bounds of the f32 values actually stored, as the spec requires.
+            let lo = f.iter().fold([f32::INFINITY; 3], |m, p| {
+                std::array::from_fn(|j| m[j].min(p[j]))
+            });
+            let hi = f.iter().fold([f32::NEG_INFINITY; 3], |m, p| {
+                std::array::from_fn(|j| m[j].max(p[j]))
+            });
+            acc["min"] = json!(lo);
+            acc["max"] = json!(hi);
+        }
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, tris: &[[u32; 3]]) -> usize {
+        let bytes: Vec<u8> = tris
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, ELEMENT_ARRAY_BUFFER);
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": UNSIGNED_INT, "count": 3 * tris.len(), "type": "SCALAR"
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// Positions, normals and indices of a unit mesh: (position, normal, indices) accessors.
+    fn unit(&mut self, m: &UnitMesh) -> (usize, usize, usize) {
+        (
+            self.vec3(&m.positions, true),
+            self.vec3(&m.normals, false),
+            self.indices(&m.triangles),
+        )
+    }
+}
+
+fn round(x: f64) -> f64 {
+    // f32 precision is all glTF readers keep; printing the f64 would only add noise digits
+    // that differ between platforms' f32 conversions. Going through f32 is exact and stable.
+    x as f32 as f64
+}
+
+fn vec(v: DVec3) -> [f64; 3] {
+    v.to_array().map(round)
+}
+
+/// The segmentation as a GLB file; `mesh`, when given, is added with vertex colours by part
+/// (it must be the mesh whose triangles `seg.triangle_parts` labels).
+pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
+    let mut b = Builder::default();
+    // Created on first use, so that a file with one kind of shape has no unused accessors.
+    let (mut sphere, mut cube) = (None, None);
+    let hull = enclosing_sphere_hull(12);
+
+    let mut materials = Vec::new();
+    let mut meshes = Vec::new();
+    let mut nodes: Vec<Value> = vec![json!({"name": "bvseg", "children": []})];
+    let mut children = Vec::new();
+    let mut shapes = Vec::new();
+    // Nodes that hold the hull meshes; outside the scene, appended after the scene's nodes.
+    let mut hull_nodes = Vec::new();
+
+    for (i, part) in seg.parts.iter().enumerate() {
+        let v = &part.volume;
+        let [r, g, bl] = part_color(i);
+        materials.push(json!({
+            "name": format!("part_{i}"),
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [round(r), round(g), round(bl), 0.6],
+                "metallicFactor": 0.0, "roughnessFactor": 0.8
+            },
+            "alphaMode": "BLEND", "doubleSided": true
+        }));
+        let (pos, nrm, idx) = match v.shape {
+            Shape::Ellipsoid => *sphere.get_or_insert_with(|| b.unit(&unit_sphere(32))),
+            Shape::Obb => *cube.get_or_insert_with(|| b.unit(&unit_cube())),
+        };
+        meshes.push(json!({
+            "name": format!("part_{i}"),
+            "primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx, "material": i}]
+        }));
+        let q = volume_rotation(v);
+        let rotation = [q.x, q.y, q.z, q.w].map(round);
+        let axes = [v.axes.x_axis, v.axes.y_axis, v.axes.z_axis].map(|a| a.to_array());
+        let exact = json!({
+            "shape": v.shape.as_str(),
+            "center": v.center.to_array(),
+            "axes": axes,
+            "radii": v.radii.to_array(),
+            "fraction": part.fraction,
+        });
+        children.push(nodes.len());
+        nodes.push(json!({
+            "name": format!("part_{i}"),
+            "mesh": meshes.len() - 1,
+            "translation": vec(v.center),
+            "rotation": rotation,
+            "scale": vec(v.radii),
+            "extras": exact,
+        }));
+        let geometry = match v.shape {
+            Shape::Obb => {
+                shapes.push(json!({"type": "box", "box": {"size": vec(2.0 * v.radii)}}));
+                json!({"shape": shapes.len() - 1})
+            }
+            Shape::Ellipsoid => {
+                let scaled: Vec<DVec3> = hull.positions.iter().map(|&p| p * v.radii).collect();
+                let pa = b.vec3(&scaled, true);
+                let ia = b.indices(&hull.triangles);
+                meshes.push(json!({
+                    "name": format!("part_{i}_hull"),
+                    "primitives": [{"attributes": {"POSITION": pa}, "indices": ia}]
+                }));
+                hull_nodes.push((i, nodes.len(), meshes.len() - 1));
+                // Patched below, once the scene's node count is known.
+                json!({"node": Value::Null, "convexHull": true})
+            }
+        };
+        children.push(nodes.len());
+        nodes.push(json!({
+            "name": format!("part_{i}_collider"),
+            "translation": vec(v.center),
+            "rotation": rotation,
+            "extensions": {"KHR_physics_rigid_bodies": {"collider": {"geometry": geometry}}},
+            "extras": exact,
+        }));
+    }
+
+    if let Some(m) = mesh {
+        materials.push(json!({
+            "name": "input_mesh",
+            "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0},
+            "doubleSided": true
+        }));
+        // Unshared corners, so that each triangle takes its part's colour.
+        let mut pos = Vec::with_capacity(3 * m.triangles().len());
+        let mut col = Vec::with_capacity(3 * m.triangles().len());
+        for (t, tri) in m.triangles().iter().enumerate() {
+            let part = seg.triangle_parts.get(t).copied().unwrap_or(0) as usize;
+            let c = DVec3::from_array(part_color(part));
+            for &k in tri {
+                pos.push(m.vertices()[k as usize]);
+                col.push(c);
+            }
+        }
+        let pa = b.vec3(&pos, true);
+        let ca = b.vec3(&col, false);
+        meshes.push(json!({
+            "name": "input_mesh",
+            "primitives": [{"attributes": {"POSITION": pa, "COLOR_0": ca}, "material": materials.len() - 1}]
+        }));
+        children.push(nodes.len());
+        nodes.push(json!({"name": "input_mesh", "mesh": meshes.len() - 1}));
+    }
+
+    nodes[0]["children"] = json!(children);
+    for (i, collider, mesh_index) in hull_nodes {
+        let node = nodes.len();
+        nodes.push(json!({"name": format!("part_{i}_hull"), "mesh": mesh_index}));
+        nodes[collider]["extensions"]["KHR_physics_rigid_bodies"]["collider"]["geometry"]["node"] =
+            json!(node);
+    }
+
+    while !b.bin.len().is_multiple_of(4) {
+        b.bin.push(0);
+    }
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": crate::GENERATOR},
+        "extensionsUsed": ["KHR_physics_rigid_bodies"],
+        "scene": 0,
+        "scenes": [{"name": "bvseg", "nodes": [0]}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+        "buffers": [{"byteLength": b.bin.len()}],
+        "extras": {"schema": crate::SCHEMA, "kind": seg.kind.as_str(), "k": seg.parts.len(),
+                   "tov": seg.metrics.tov, "mov": seg.metrics.mov},
+    });
+    if !shapes.is_empty() {
+        doc["extensionsUsed"] = json!(["KHR_implicit_shapes", "KHR_physics_rigid_bodies"]);
+        doc["extensions"] = json!({"KHR_implicit_shapes": {"shapes": shapes}});
+    }
+    // serde_json's map keeps keys sorted, so the text is deterministic.
+    let text = serde_json::to_vec(&doc).unwrap_or_default();
+    container(text, b.bin)
+}
+
+fn container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}

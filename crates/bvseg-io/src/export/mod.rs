@@ -1,0 +1,118 @@
+//! Engine-ready outputs: a glTF binary ([`to_glb`]), MuJoCo MJCF ([`to_mjcf`]), the proxies
+//! as an OBJ ([`to_obj`]) and per-triangle part labels ([`to_labels`]). [`write_output`]
+//! picks the format from the file's extension and writes atomically.
+//!
+//! Every writer is deterministic: equal segmentations give byte-identical files.
+mod glb;
+mod mjcf;
+mod obj;
+mod proxy;
+
+use std::path::Path;
+
+use bvseg_core::{Mesh, Segmentation};
+
+use crate::{write_atomic, IoError};
+
+pub use glb::to_glb;
+pub use mjcf::to_mjcf;
+pub use obj::to_obj;
+pub use proxy::{part_color, volume_rotation};
+
+/// An output format, chosen by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// `.json`: the `bvseg.volumes/1` document.
+    Json,
+    /// `.glb`: glTF 2.0 binary with one node per volume and physics colliders.
+    Glb,
+    /// `.xml`: MuJoCo MJCF with one geom per volume.
+    Mjcf,
+    /// `.obj`: the volumes as meshes, one object per part.
+    Obj,
+}
+
+/// The output extensions, for messages.
+pub const OUTPUT_EXTENSIONS: &str = ".json, .glb, .xml (MJCF), .obj";
+
+impl OutputFormat {
+    /// The format named by `path`'s extension.
+    pub fn from_path(path: &Path) -> Result<Self, IoError> {
+        let ext = crate::extension(path);
+        match ext.as_deref() {
+            Some("json") => Ok(Self::Json),
+            Some("glb") => Ok(Self::Glb),
+            Some("xml") => Ok(Self::Mjcf),
+            Some("obj") => Ok(Self::Obj),
+            _ => Err(IoError::UnsupportedFormat {
+                name: path.display().to_string(),
+                what: "output",
+                ext,
+                supported: OUTPUT_EXTENSIONS,
+            }),
+        }
+    }
+}
+
+/// What the writers may add beyond the volumes.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ExportOptions<'a> {
+    /// GLB: also the input mesh, coloured by part (its triangles must be the ones the
+    /// segmentation labelled).
+    pub mesh: Option<&'a Mesh>,
+}
+
+/// Writes `seg` to `path` in the format its extension names, atomically.
+pub fn write_output(
+    path: impl AsRef<Path>,
+    seg: &Segmentation,
+    options: &ExportOptions<'_>,
+) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let bytes = match OutputFormat::from_path(path)? {
+        OutputFormat::Json => return crate::write_json(path, seg),
+        OutputFormat::Glb => to_glb(seg, options.mesh),
+        OutputFormat::Mjcf => {
+            let model = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "bvseg".into());
+            to_mjcf(seg, &model).into_bytes()
+        }
+        OutputFormat::Obj => to_obj(seg).into_bytes(),
+    };
+    write_atomic(path, &bytes)
+}
+
+/// One part index per triangle of the segmented mesh, one per line.
+pub fn to_labels(seg: &Segmentation) -> String {
+    to_labels_with_dropped(seg, &[])
+}
+
+/// One line per triangle of the file: its part index, or `-1` for a triangle that loading
+/// dropped as degenerate (`dropped`: their indices among the triangles read, increasing, as
+/// in [`crate::LoadedMesh::dropped`]).
+pub fn to_labels_with_dropped(seg: &Segmentation, dropped: &[usize]) -> String {
+    let mut s = String::with_capacity((seg.triangle_parts.len() + dropped.len()) * 3);
+    let mut parts = seg.triangle_parts.iter();
+    let mut dropped = dropped.iter().peekable();
+    let total = seg.triangle_parts.len() + dropped.len();
+    for k in 0..total {
+        if dropped.next_if(|&&d| d == k).is_some() {
+            s.push_str("-1\n");
+        } else if let Some(p) = parts.next() {
+            s.push_str(&p.to_string());
+            s.push('\n');
+        }
+    }
+    s
+}
+
+/// Writes [`to_labels_with_dropped`] to `path`, atomically.
+pub fn write_labels(
+    path: impl AsRef<Path>,
+    seg: &Segmentation,
+    dropped: &[usize],
+) -> Result<(), IoError> {
+    write_atomic(path, to_labels_with_dropped(seg, dropped).as_bytes())
+}

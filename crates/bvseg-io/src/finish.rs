@@ -1,0 +1,160 @@
+//! The step every reader ends with: check the raw triangles, weld, drop degenerate
+//! triangles, turn an inward-facing surface outward, and describe the result.
+use std::collections::HashMap;
+
+use bvseg_core::Mesh;
+use glam::DVec3;
+
+use crate::report::MeshReport;
+use crate::IoError;
+
+/// Upper bound on the triangles a file may yield. A glTF scene can instance one mesh many
+/// times, so its triangle count is not bounded by the file's size; this bound is.
+pub const MAX_TRIANGLES: usize = 50_000_000;
+
+/// Raw geometry as a reader produced it, before welding.
+#[derive(Default)]
+pub(crate) struct RawMesh {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[usize; 3]>,
+}
+
+impl RawMesh {
+    /// Fails once the triangle budget would be exceeded by `more` triangles.
+    pub fn reserve_triangles(&self, more: usize, name: &str) -> Result<(), IoError> {
+        if self.triangles.len().saturating_add(more) > MAX_TRIANGLES {
+            return Err(IoError::Parse {
+                name: name.to_owned(),
+                line: None,
+                message: format!("more than {MAX_TRIANGLES} triangles; refusing to load"),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A loaded mesh with what was changed on the way in, for the caller to report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedMesh {
+    /// The welded, validated mesh.
+    pub mesh: Mesh,
+    /// What loading did to the file's data.
+    pub stats: LoadStats,
+    /// What the user should know about the mesh (pieces, holes, volume, ...).
+    pub report: MeshReport,
+    /// Indices, among the triangles read (after fanning polygons), of those dropped as
+    /// degenerate, in increasing order: with them, per-triangle results can be mapped back
+    /// to the file's triangles.
+    pub dropped: Vec<usize>,
+}
+
+/// What loading changed, so that a front end can tell the user.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LoadStats {
+    /// Vertices referenced by faces, before welding.
+    pub vertices_read: usize,
+    /// Vertices removed by welding exactly coincident positions.
+    pub welded: usize,
+    /// Triangles read, after fanning polygons.
+    pub triangles_read: usize,
+    /// Triangles dropped because two of their corners are the same vertex after welding.
+    pub degenerate: usize,
+}
+
+/// Welds, validates and reports; see the module docs.
+pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
+    let RawMesh {
+        positions,
+        triangles,
+    } = raw;
+    if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+        return Err(IoError::Parse {
+            name: name.to_owned(),
+            line: None,
+            message: format!(
+                "a vertex has a non-finite coordinate ({} {} {})",
+                p.x, p.y, p.z
+            ),
+        });
+    }
+    // Indices become u32 in the mesh; a file within the size limit cannot exceed that, but an
+    // in-memory reader is not bound by a file system.
+    if positions.len() > u32::MAX as usize {
+        return Err(IoError::Parse {
+            name: name.to_owned(),
+            line: None,
+            message: "too many vertices (more than 2^32)".into(),
+        });
+    }
+    let vertices_read = positions.len();
+    let triangles_read = triangles.len();
+    let (vertices, remap) = weld(&positions);
+    let welded = vertices_read - vertices.len();
+    let mut tris = Vec::with_capacity(triangles.len());
+    let mut dropped = Vec::new();
+    for (k, t) in triangles.iter().enumerate() {
+        let [a, b, c] = t.map(|i| remap[i]);
+        if a != b && b != c && a != c {
+            tris.push([a, b, c]);
+        } else {
+            dropped.push(k);
+        }
+    }
+    let degenerate = triangles_read - tris.len();
+    if tris.is_empty() {
+        return Err(IoError::NoTriangles {
+            name: name.to_owned(),
+            degenerate,
+        });
+    }
+    let mut mesh = Mesh::new(vertices, tris).map_err(|source| IoError::Mesh {
+        name: name.to_owned(),
+        source,
+    })?;
+    let mut report = MeshReport::of(&mesh, false);
+    // The core accepts either orientation, but engines and the `--with-mesh` output expect
+    // outward faces; a mostly closed surface facing inward is almost always an export
+    // mistake. An open sheet has no inside, so its "volume" says nothing about orientation.
+    if report.volume < 0.0 && report.open_edges * 10 <= report.edges {
+        let (v, t) = (mesh.vertices().to_vec(), mesh.triangles().to_vec());
+        let t = t.into_iter().map(|[a, b, c]| [a, c, b]).collect();
+        mesh = Mesh::new(v, t).map_err(|source| IoError::Mesh {
+            name: name.to_owned(),
+            source,
+        })?;
+        report.volume = -report.volume;
+        report.flipped = true;
+    }
+    Ok(LoadedMesh {
+        mesh,
+        stats: LoadStats {
+            vertices_read,
+            welded,
+            triangles_read,
+            degenerate,
+        },
+        report,
+        dropped,
+    })
+}
+
+/// Merges vertices whose coordinates are bit-identical (with -0.0 taken as 0.0), keeping the
+/// first occurrence and the order of first occurrences, so that the result does not depend on
+/// hashing. Returns the vertices and, for each input vertex, its new index.
+fn weld(positions: &[DVec3]) -> (Vec<DVec3>, Vec<u32>) {
+    // Adding 0.0 turns -0.0 into +0.0 and leaves every other value unchanged.
+    let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
+    let mut index: HashMap<[u64; 3], u32> = HashMap::with_capacity(positions.len());
+    let mut vertices = Vec::with_capacity(positions.len());
+    let remap = positions
+        .iter()
+        .map(|&p| {
+            *index.entry(key(p)).or_insert_with(|| {
+                vertices.push(p);
+                // Bounded by the caller's check that there are at most 2^32 positions.
+                (vertices.len() - 1) as u32
+            })
+        })
+        .collect();
+    (vertices, remap)
+}

@@ -1,0 +1,247 @@
+//! The engine-ready outputs read back: GLB through the `gltf` crate, MJCF as XML, OBJ through
+//! our own reader.
+use std::fs;
+use std::path::Path;
+
+use bvseg_core::{BoundingKind, BoundingVolume, Metrics, Part, Segmentation, Shape};
+use bvseg_io::export::{to_glb, to_labels, to_mjcf, to_obj, write_output, ExportOptions};
+use glam::{DMat3, DQuat, DVec3, EulerRot};
+
+fn part(shape: Shape, center: DVec3, radii: DVec3, euler: (f64, f64, f64)) -> Part {
+    Part {
+        volume: BoundingVolume {
+            shape,
+            center,
+            axes: DMat3::from_quat(DQuat::from_euler(EulerRot::XYZ, euler.0, euler.1, euler.2)),
+            radii,
+        },
+        fraction: 0.5,
+        samples: 100,
+        ov: 0.1,
+        e: 1.0,
+    }
+}
+
+/// Two parts, one of each shape, over a two-triangle "mesh".
+fn seg() -> Segmentation {
+    Segmentation {
+        kind: BoundingKind::Mixed,
+        parts: vec![
+            part(
+                Shape::Ellipsoid,
+                DVec3::new(1.0, 2.0, 3.0),
+                DVec3::new(0.5, 1.0, 2.0),
+                (0.3, -0.2, 1.0),
+            ),
+            part(
+                Shape::Obb,
+                DVec3::new(-1.0, 0.0, 0.5),
+                DVec3::new(0.25, 0.75, 1.5),
+                (1.2, 0.4, -0.7),
+            ),
+        ],
+        metrics: Metrics {
+            k: 2,
+            f: 1.1,
+            tov: 0.2,
+            mov: 0.3,
+            samples: 200,
+        },
+        history: vec![],
+        hierarchy: vec![],
+        triangle_parts: vec![0, 1],
+        sample_parts: vec![],
+        cell_size: 0.1,
+    }
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * (1.0 + b.abs())
+}
+
+#[test]
+fn glb_has_one_node_per_volume_and_colliders() {
+    let seg = seg();
+    let mesh = bvseg_core::Mesh::new(
+        vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+        vec![[0, 2, 1], [0, 1, 3]],
+    )
+    .unwrap();
+    let bytes = to_glb(&seg, Some(&mesh));
+    assert_eq!(bytes, to_glb(&seg, Some(&mesh)), "deterministic");
+    // Full validation, including the accessor bounds the spec requires.
+    let g = gltf::Gltf::from_slice(&bytes).unwrap();
+    let scene = g.default_scene().unwrap();
+    let root = scene.nodes().next().unwrap();
+    let parts: Vec<_> = root
+        .children()
+        .filter(|n| {
+            n.name()
+                .is_some_and(|s| s.starts_with("part_") && !s.contains("_collider"))
+        })
+        .collect();
+    assert_eq!(parts.len(), seg.parts.len());
+    for (i, n) in parts.iter().enumerate() {
+        let v = &seg.parts[i].volume;
+        assert_eq!(n.name(), Some(format!("part_{i}").as_str()));
+        let (t, r, s) = n.transform().decomposed();
+        for j in 0..3 {
+            assert!(close(t[j] as f64, v.center[j], 1e-6));
+            assert!(close(s[j] as f64, v.radii[j], 1e-6));
+        }
+        let q = DQuat::from_xyzw(r[0] as f64, r[1] as f64, r[2] as f64, r[3] as f64);
+        assert!((q * DVec3::Y - v.axes.y_axis).length() < 1e-6);
+        assert!(n.mesh().is_some());
+    }
+    // Colliders: unscaled; a box shape of the exact size, a hull enclosing the ellipsoid.
+    let json = g.document.as_json();
+    let shapes = &g.extension_value("KHR_implicit_shapes").unwrap()["shapes"];
+    for n in root
+        .children()
+        .filter(|n| n.name().is_some_and(|s| s.ends_with("_collider")))
+    {
+        let i: usize = n.name().unwrap()["part_".len()..]
+            .trim_end_matches("_collider")
+            .parse()
+            .unwrap();
+        let v = &seg.parts[i].volume;
+        assert_eq!(n.transform().decomposed().2, [1.0; 3]);
+        let geom = &n.extension_value("KHR_physics_rigid_bodies").unwrap()["collider"]["geometry"];
+        match v.shape {
+            Shape::Obb => {
+                let size = &shapes[geom["shape"].as_u64().unwrap() as usize]["box"]["size"];
+                for j in 0..3 {
+                    assert!(close(size[j].as_f64().unwrap(), 2.0 * v.radii[j], 1e-6));
+                }
+            }
+            Shape::Ellipsoid => {
+                assert_eq!(geom["convexHull"], true);
+                let hull = g
+                    .nodes()
+                    .nth(geom["node"].as_u64().unwrap() as usize)
+                    .unwrap();
+                let prim = hull.mesh().unwrap().primitives().next().unwrap();
+                let data = g.blob.as_deref().unwrap();
+                let r = prim.reader(|_| Some(data));
+                let p: Vec<DVec3> = r
+                    .read_positions()
+                    .unwrap()
+                    .map(|p| DVec3::from_array(p.map(f64::from)))
+                    .collect();
+                let idx: Vec<u32> = r.read_indices().unwrap().into_u32().collect();
+                // Each face plane lies beyond the ellipsoid's support in its normal direction.
+                for t in idx.chunks(3) {
+                    let [a, b, c] = [0, 1, 2].map(|k| p[t[k] as usize]);
+                    let nrm = (b - a).cross(c - a).normalize();
+                    let support = (nrm * v.radii).length();
+                    assert!(
+                        nrm.dot(a) >= support * (1.0 - 1e-6),
+                        "{} < {support}",
+                        nrm.dot(a)
+                    );
+                }
+                let extras: serde_json::Value =
+                    serde_json::from_str(n.extras().as_ref().unwrap().get()).unwrap();
+                assert_eq!(extras["shape"], "ellipsoid");
+                assert_eq!(extras["radii"][2].as_f64(), Some(v.radii.z));
+            }
+        }
+    }
+    let input = root
+        .children()
+        .find(|n| n.name() == Some("input_mesh"))
+        .unwrap();
+    let prim = input.mesh().unwrap().primitives().next().unwrap();
+    assert!(prim.get(&gltf::Semantic::Colors(0)).is_some());
+    assert_eq!(prim.get(&gltf::Semantic::Positions).unwrap().count(), 6);
+    assert!(json
+        .extensions_used
+        .contains(&"KHR_physics_rigid_bodies".to_string()));
+    // Our own reader takes it too (the proxies and the input mesh).
+    assert!(bvseg_io::load_mesh_from_bytes(&bytes, "x.glb").is_ok());
+}
+
+#[test]
+fn mjcf_has_one_geom_per_volume_with_exact_sizes() {
+    let seg = seg();
+    let text = to_mjcf(&seg, "my <model>");
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let root = doc.root_element();
+    assert_eq!(root.tag_name().name(), "mujoco");
+    assert_eq!(root.attribute("model"), Some("my <model>"));
+    let geoms: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("geom"))
+        .collect();
+    assert_eq!(geoms.len(), seg.parts.len());
+    for (g, p) in geoms.iter().zip(&seg.parts) {
+        let v = &p.volume;
+        let nums = |a: &str| -> Vec<f64> {
+            g.attribute(a)
+                .unwrap()
+                .split(' ')
+                .map(|x| x.parse().unwrap())
+                .collect()
+        };
+        assert_eq!(
+            g.attribute("type"),
+            Some(if v.shape == Shape::Obb {
+                "box"
+            } else {
+                "ellipsoid"
+            })
+        );
+        assert_eq!(nums("size"), v.radii.to_array());
+        assert_eq!(nums("pos"), v.center.to_array());
+        let q = nums("quat");
+        let q = DQuat::from_xyzw(q[1], q[2], q[3], q[0]);
+        assert!((q * DVec3::X - v.axes.x_axis).length() < 1e-12);
+        assert!(g.parent().unwrap().has_tag_name("body"));
+    }
+}
+
+#[test]
+fn obj_proxies_are_one_object_per_part() {
+    let seg = seg();
+    let text = to_obj(&seg);
+    for (i, p) in seg.parts.iter().enumerate() {
+        let opts = bvseg_io::LoadOptions {
+            object: Some(format!("part_{i}")),
+            ..Default::default()
+        };
+        let l = bvseg_io::load_mesh_from_bytes_with(text.as_bytes(), "p.obj", &opts).unwrap();
+        assert_eq!(l.report.open_edges, 0);
+        let (vol, exact) = (l.report.volume, p.volume.volume());
+        match p.volume.shape {
+            Shape::Obb => assert!(close(vol, exact, 1e-9)),
+            // The inscribed UV sphere is a little smaller than the ellipsoid.
+            Shape::Ellipsoid => assert!(vol < exact && vol > 0.95 * exact, "{vol} vs {exact}"),
+        }
+    }
+}
+
+#[test]
+fn write_output_picks_the_format_and_refuses_others() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bvseg-io-export");
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    let seg = seg();
+    for f in ["a.json", "a.glb", "a.xml", "a.obj"] {
+        write_output(dir.join(f), &seg, &ExportOptions::default()).unwrap();
+    }
+    assert!(fs::read(dir.join("a.glb")).unwrap().starts_with(b"glTF"));
+    assert!(fs::read_to_string(dir.join("a.xml"))
+        .unwrap()
+        .starts_with("<mujoco model=\"a\">"));
+    let e = write_output(dir.join("a.ply"), &seg, &ExportOptions::default()).unwrap_err();
+    assert!(
+        e.to_string().ends_with(
+            "unsupported output format '.ply' (supported: .json, .glb, .xml (MJCF), .obj)"
+        ),
+        "{e}"
+    );
+    assert!(!dir.join("a.ply").exists());
+    assert_eq!(to_labels(&seg), "0\n1\n");
+    let with = bvseg_io::export::to_labels_with_dropped(&seg, &[0, 2, 4]);
+    assert_eq!(with, "-1\n0\n-1\n1\n-1\n");
+}
