@@ -8,8 +8,11 @@
 //!    (the paper's choice). A split that does not improve the figure out of tolerance is
 //!    undone and the next part tried (up to [`SPLIT_TRIES`]); if every try fails the first is
 //!    kept. Beyond the paper: when only MOV is out of tolerance, merging the worst part into
-//!    a neighbour is tried first, and refinement stops when MOV has not improved for
-//!    [`MOV_PATIENCE`] steps.
+//!    a neighbour is tried first, a split must keep TOV in tolerance, and refinement stops
+//!    when no split helps or MOV has not improved for [`MOV_PATIENCE`] steps. When splits
+//!    stall with TOV near its tolerance, a tightening checkpoint (a short
+//!    [`crate::tightening`]) lowers TOV on the partition itself, so that fewer parts are
+//!    needed.
 //! 3. Merge: merge the pair (touching, or with overlapping volumes) whose merge lowers TOV
 //!    most, while one does and the tolerances stay met.
 //! 4. Final: the tightening ([`crate::tightening`]; in tolerance mode followed by
@@ -40,12 +43,27 @@ use crate::{
 /// Passes of the outside-volume tightening (see [`crate::tightening`]).
 pub const TIGHTEN_PASSES: usize = 40;
 
+/// Of the tightening passes, how many judge every move (the others only those that gained).
+pub const TIGHTEN_FULL_PASSES: usize = 3;
+
+/// Passes of a tightening checkpoint during refinement (one of them full).
+pub const CHECKPOINT_PASSES: usize = 4;
+
 /// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
 pub const RELIEVE_STEPS: usize = 40;
 
 /// Refinement steps without a better MOV (while only MOV is out of tolerance) after which
 /// refinement stops.
 pub const MOV_PATIENCE: usize = 6;
+
+/// A tightening checkpoint is due when TOV is within this factor of its tolerance...
+pub const CHECKPOINT_NEAR: f64 = 1.3;
+
+/// ... and the last this many splits ...
+pub const CHECKPOINT_STALL: usize = 4;
+
+/// ... lowered it by less than this share.
+pub const CHECKPOINT_GAIN: f64 = 0.03;
 
 /// How many parts a refinement step tries to split before keeping the first split anyway.
 pub const SPLIT_TRIES: usize = 4;
@@ -88,6 +106,8 @@ pub struct Segmenter {
     tries: Vec<usize>,
     first_try: Option<State>,
     refine_steps: usize,
+    /// k at the last tightening checkpoint.
+    checkpoint_k: usize,
     /// Best MOV seen while only MOV was out of tolerance, and steps since it improved.
     best_mov: f64,
     stale: usize,
@@ -122,6 +142,7 @@ impl Segmenter {
             tries: Vec::new(),
             first_try: None,
             refine_steps: 0,
+            checkpoint_k: 0,
             best_mov: f64::INFINITY,
             stale: 0,
             history: Vec::new(),
@@ -272,6 +293,10 @@ impl Segmenter {
                 self.phase = Phase::Final;
                 return None;
             }
+            if self.checkpoint_due(cur) {
+                let part = cur.part.clone();
+                return Some(self.checkpoint(part));
+            }
             if cur.tov < self.params.tov {
                 // Only MOV is out of tolerance. Stop when it has not improved for a while:
                 // more parts would not fix it (see `merge_worst`), only add cost.
@@ -339,11 +364,12 @@ impl Segmenter {
             );
             let cand = self.evaluate(part);
             let cur = self.state.as_ref()?;
-            // A split is kept if it improves the figure that is out of tolerance.
+            // A split is kept if it improves the figure that is out of tolerance (and, when
+            // that is MOV, keeps TOV in tolerance).
             let better = if cur.tov >= self.params.tov {
                 cand.tov < cur.tov
             } else {
-                cand.mov < cur.mov
+                cand.mov < cur.mov && cand.tov < self.params.tov
             };
             if better {
                 self.tries.clear();
@@ -359,8 +385,14 @@ impl Segmenter {
             }
         }
         // Every try made TOV worse: keep the first (the part with the largest OV), as the
-        // paper does, so that refinement always progresses.
+        // paper does, so that refinement always progresses. When only MOV was out of
+        // tolerance, no split helps it without breaking TOV: refinement is over.
+        let tov_bad = self
+            .state
+            .as_ref()
+            .is_some_and(|s| s.tov >= self.params.tov);
         match self.first_try.take() {
+            Some(_) if !tov_bad => self.end_refinement(),
             Some(s) => Some(self.accept(StepKind::Split, s)),
             None => {
                 // No part could be split at all.
@@ -368,6 +400,49 @@ impl Segmenter {
                 None
             }
         }
+    }
+
+    /// Whether to tighten the partition now (see [`Segmenter::checkpoint`]): while TOV is out
+    /// of tolerance but within [`CHECKPOINT_NEAR`] times it, and the last
+    /// [`CHECKPOINT_STALL`] splits lowered it by less than [`CHECKPOINT_GAIN`] (relative).
+    fn checkpoint_due(&self, cur: &State) -> bool {
+        let tol = self.params.tov;
+        if !self.params.polish || cur.tov < tol || cur.tov >= CHECKPOINT_NEAR * tol {
+            return false;
+        }
+        let kept: Vec<&Step> = self
+            .history
+            .iter()
+            .rev()
+            .filter(|s| s.kind != StepKind::Backtrack)
+            .take(CHECKPOINT_STALL + 1)
+            .collect();
+        let Some(oldest) = kept.get(CHECKPOINT_STALL) else {
+            return false;
+        };
+        oldest.k > self.checkpoint_k
+            && kept.iter().all(|s| s.kind == StepKind::Split)
+            && oldest.tov - cur.tov < CHECKPOINT_GAIN * oldest.tov
+    }
+
+    /// Beyond the paper: the tightening of the final step ([`crate::tightening`]), run during
+    /// the refinement. The tolerance is then judged, and the next parts to split chosen, on
+    /// the partition the user would get, so refinement stops at fewer parts (the bunny meets
+    /// the default TOV tolerance with 30 parts instead of 40).
+    fn checkpoint(&mut self, mut part: Partition) -> Step {
+        self.checkpoint_k = part.k();
+        tighten(
+            &self.mesh,
+            &self.solid,
+            &self.comps,
+            &mut self.fitter,
+            &mut part,
+            CHECKPOINT_PASSES,
+            1,
+            self.params.mov,
+        );
+        let s = self.evaluate(part);
+        self.accept(StepKind::Tighten, s)
     }
 
     /// Pairs of parts that may merge: those that touch, and those whose volumes' boxes
@@ -522,6 +597,7 @@ impl Segmenter {
                 &mut self.fitter,
                 &mut part,
                 TIGHTEN_PASSES,
+                TIGHTEN_FULL_PASSES,
                 self.params.mov,
             );
             if self.params.k.is_none() {

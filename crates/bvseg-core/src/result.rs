@@ -43,6 +43,9 @@ pub enum StepKind {
     Backtrack,
     /// Two adjacent parts were merged.
     Merge,
+    /// Boundary layers moved between parts to lower the outside volume (a checkpoint of
+    /// the tightening during refinement, see [`crate::refinement`]).
+    Tighten,
     /// The final bounding volumes (minimum-volume ellipsoids / boxes) were fitted.
     Final,
 }
@@ -55,6 +58,7 @@ impl StepKind {
             StepKind::Split => "split",
             StepKind::Backtrack => "backtrack",
             StepKind::Merge => "merge",
+            StepKind::Tighten => "tighten",
             StepKind::Final => "final",
         }
     }

@@ -21,9 +21,6 @@ use crate::Mesh;
 /// current volume for the move to be tried.
 const REACH: f64 = 1.15;
 
-/// How many times the tightening judges every move (see [`tighten`]).
-const FULL_PASSES: usize = 3;
-
 /// A pass that lowers TOV by less than this ends the tightening.
 const MIN_PASS_GAIN: f64 = 1e-3;
 
@@ -289,10 +286,12 @@ fn apply(part: &mut Partition, mv: &Move) {
     part.parts[mv.to as usize] = mv.m_to;
 }
 
-/// Run up to `passes` passes of boundary-layer moves on `part` (most of them cheap: see the
+/// Run up to `passes` passes of boundary-layer moves on `part`, of which at most
+/// `full_passes` judge every move (the others only the moves that gained before: see the
 /// comment on `last_gain`); returns the moves made.
 /// `mov_tol` is the per-part tolerance (sigma_L) a move may not push a part's OV past
 /// (unless that part was already past it).
+#[allow(clippy::too_many_arguments)]
 pub fn tighten(
     mesh: &Mesh,
     solid: &Solid,
@@ -300,9 +299,11 @@ pub fn tighten(
     fitter: &mut Fitter,
     part: &mut Partition,
     passes: usize,
+    full_passes: usize,
     mov_tol: f64,
 ) -> usize {
     let g = &solid.grid;
+    let max_full = full_passes.max(1);
     let mut fits: Vec<Arc<Fit>> = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
     let mut cov = Coverage::new(solid);
     for f in &fits {
@@ -312,12 +313,12 @@ pub fn tighten(
     let min_part = min_part(solid, part);
     // Gain of each pair's move when last judged. A move that did not gain rarely starts to
     // after a few moves elsewhere, so most passes judge again only the moves that gained (or
-    // are new). When that stalls, a full pass judges them all again, up to FULL_PASSES times.
+    // are new). When that stalls, a full pass judges them all again, up to `full_passes` times.
     let mut last_gain: HashMap<(u32, u32), i64> = HashMap::new();
     let mut full = true;
-    let mut full_passes = 0;
+    let mut fulls = 0;
     for _ in 0..passes {
-        full_passes += usize::from(full);
+        fulls += usize::from(full);
         let mut cands: Vec<Move> = Vec::new();
         for (pair, layer) in layers(solid, part, |_, _| true) {
             if !full && last_gain.get(&pair).is_some_and(|&g| g <= 0) {
@@ -393,7 +394,7 @@ pub fn tighten(
         // Stop when a pass gains less than MIN_PASS_GAIN of the solid's volume in TOV.
         let gain = union_before.saturating_sub(cov.union) as f64 / solid.len() as f64;
         if applied == 0 || gain < MIN_PASS_GAIN {
-            if full || full_passes == FULL_PASSES {
+            if full || fulls == max_full {
                 break;
             }
             full = true;
