@@ -12,6 +12,8 @@ use bvseg_core::{segment_with, BoundingKind, Mesh, Params, Segmentation, Step};
 use bvseg_io::{IoError, LoadedMesh};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+mod verify;
+
 /// The mesh used when none is given, as it sits in the source tree.
 const BUNDLED_MESH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
 /// How messages name the bundled mesh (the absolute source path would only confuse).
@@ -34,6 +36,8 @@ struct Cli {
 enum Command {
     /// Segment a closed mesh's volume and bound each part.
     Segment(SegmentArgs),
+    /// Check a volumes file against a mesh: enclosure of every triangle, TOV and MOV.
+    Verify(verify::VerifyArgs),
 }
 
 #[derive(Args, Debug)]
@@ -123,6 +127,7 @@ fn run() -> anyhow::Result<ExitCode> {
     let cli = Cli::parse();
     match cli.command {
         Command::Segment(args) => segment(&args),
+        Command::Verify(args) => verify::run(&args),
     }
 }
 
@@ -331,6 +336,7 @@ mod tests {
         v.extend_from_slice(args);
         Cli::try_parse_from(v).map(|c| match c.command {
             Command::Segment(a) => a,
+            _ => unreachable!("parsed as segment"),
         })
     }
 

@@ -9,8 +9,13 @@ mod atomic;
 mod error;
 mod json;
 mod obj;
+mod volumes_read;
 
 use std::path::Path;
+
+pub use volumes_read::{
+    parse_volumes, read_volumes, ReportedMetrics, VolumesFile, MAX_VOLUMES, MAX_VOLUMES_BYTES,
+};
 
 pub use atomic::write_atomic;
 pub use error::IoError;
