@@ -346,3 +346,40 @@ proptest! {
         }
     }
 }
+
+/// The case proptest found: two parts of one piece whose volumes' boxes overlapped, but which
+/// did not touch, were merged into one part of two separate regions.
+#[test]
+fn merge_keeps_parts_connected_regression() {
+    let prims = vec![
+        Prim {
+            kind: 0,
+            at: [0.0070597779823092024, -0.3922565500553068, -0.40897385365012534],
+            size: [0.25, 0.34124447332654173, 0.7848654919781596],
+            angles: [-2.00526087567311, 0.0, 2.4614326369792523],
+        },
+        Prim {
+            kind: 0,
+            at: [0.3958690498345309, 0.0, 0.1621185211237387],
+            size: [0.25, 0.4664921615023037, 0.2564904686716467],
+            angles: [-2.064933832453733, 0.0, 0.0],
+        },
+    ];
+    let map = Affine {
+        angles: [0.19827001143741754, 0.0, 0.0],
+        scale: [1.1080278580316145, 1.4488061430013064, 2.2155372099991797],
+        shear: -0.33176297078092054,
+        shift: [77.70305834854972, 29.19120246752928, -53.97523471500941],
+    };
+    let mesh = apply(&map, &build(&prims));
+    let params = Params {
+        samples: 1500,
+        seed: 1764072409045963465,
+        bounding: BoundingKind::Obb,
+        max_k: 8,
+        ..Params::default()
+    };
+    let seg = segment(&mesh, &params).expect("segments");
+    assert!(seg.history.iter().any(|s| s.kind == bvseg::StepKind::Merge));
+    check_segmentation(&mesh, &params, &seg).unwrap();
+}
