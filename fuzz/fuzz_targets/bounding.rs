@@ -24,9 +24,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     let _ = convex_hull(&pts);
-    let extent = pts
-        .iter()
-        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    let extent = pts.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
     let min_r = (extent * 1e-6).max(scale * 1e-3);
     let e = mvee(&pts, 1e-4, min_r);
     let b = min_obb(&pts, min_r);

@@ -1,90 +1,15 @@
 //! The whole pipeline on small arbitrary meshes: no panic, no hang, and the union of the
-//! output volumes encloses every triangle (checked by the independent verifier).
-//!
-//! Input: 4 header bytes (samples, k, bounding kind, mode), then either raw geometry (mode
-//! even: up to 16 vertices of 3 x i8, up to 32 triangles of 3 index bytes) or a union of up
-//! to 4 boxes / ellipsoids / capsules (mode odd: 8 bytes each).
+//! output volumes encloses every triangle (checked by the independent verifier). The input
+//! format is `pipeline_case` in `tests/support/fuzz_input.rs`, shared with the regression
+//! replay.
 #![no_main]
-use bvseg_core::verify::{verify, VerifyOptions};
-use bvseg_core::{segment, shapes, BoundingKind, Mesh, Params};
-use glam::{DMat3, DVec3};
 use libfuzzer_sys::fuzz_target;
 
-fn raw_mesh(data: &[u8]) -> Option<Mesh> {
-    let nv = (*data.first()? as usize % 16) + 1;
-    let vb = data.get(1..1 + 3 * nv)?;
-    let v: Vec<DVec3> = vb
-        .chunks_exact(3)
-        .map(|c| DVec3::new(c[0] as i8 as f64, c[1] as i8 as f64, c[2] as i8 as f64))
-        .collect();
-    let t: Vec<[u32; 3]> = data[1 + 3 * nv..]
-        .chunks_exact(3)
-        .take(32)
-        .map(|c| [c[0], c[1], c[2]].map(|i| (i as usize % nv) as u32))
-        .collect();
-    Mesh::new(v, t).ok()
-}
-
-fn solid_union(data: &[u8]) -> Option<Mesh> {
-    let f = |b: u8| b as f64 / 32.0;
-    let parts: Vec<Mesh> = data
-        .chunks_exact(8)
-        .take(4)
-        .map(|c| {
-            let at = DVec3::new(f(c[1]), f(c[2]), f(c[3]));
-            let size = DVec3::new(f(c[4]), f(c[5]), f(c[6])) + 0.05;
-            let rot = DMat3::from_euler(glam::EulerRot::XYZ, f(c[7]), 0.5 * f(c[7]), 0.0);
-            match c[0] % 3 {
-                0 => shapes::cuboid(at, size, rot),
-                1 => shapes::ellipsoid(at, size, rot, 8 + (c[7] % 8) as usize),
-                _ => shapes::capsule(at, at + size, 0.2 + 0.1 * f(c[4]), 8),
-            }
-        })
-        .collect();
-    if parts.is_empty() {
-        return None;
-    }
-    Some(shapes::union(&parts))
-}
+#[path = "../../tests/support/fuzz_input.rs"]
+mod fuzz_input;
 
 fuzz_target!(|data: &[u8]| {
-    if data.len() < 4 {
-        return;
-    }
-    let samples = 100 + data[0] as usize;
-    let k = match data[1] % 8 {
-        0 => None,
-        k => Some(k as usize),
-    };
-    let bounding = [BoundingKind::Ellipsoid, BoundingKind::Obb, BoundingKind::Mixed]
-        [data[2] as usize % 3];
-    let mesh = if data[3] % 2 == 0 {
-        raw_mesh(&data[4..])
-    } else {
-        solid_union(&data[4..])
-    };
-    let Some(mesh) = mesh else { return };
-    let params = Params {
-        samples,
-        k,
-        bounding,
-        max_k: 6,
-        seed: data[3] as u64,
-        ..Params::default()
-    };
-    let Ok(seg) = segment(&mesh, &params) else { return };
-    let vols: Vec<_> = seg.parts.iter().map(|p| p.volume).collect();
-    // The segmentation's own claim: each triangle's three corners are in its part's volume.
-    for (t, &p) in seg.triangle_parts.iter().enumerate() {
-        for c in mesh.corners(t) {
-            assert!(vols[p as usize].contains(c), "triangle {t} escapes part {p}");
-        }
-    }
-    let opts = VerifyOptions {
-        points: 1000,
-        ..VerifyOptions::default()
-    };
-    if let Ok(r) = verify(&mesh, &vols, &opts) {
-        assert!(r.all_enclosed(), "verify: {r:?}");
+    if let Some((mesh, params)) = fuzz_input::pipeline_case(data) {
+        fuzz_input::check_pipeline(&mesh, &params);
     }
 });
