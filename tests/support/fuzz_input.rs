@@ -60,7 +60,7 @@ pub fn pipeline_case(data: &[u8]) -> Option<(Mesh, Params)> {
         BoundingKind::Obb,
         BoundingKind::Mixed,
     ][data[2] as usize % 3];
-    let mesh = if data[3] % 2 == 0 {
+    let mesh = if data[3] & 1 == 0 {
         raw_mesh(&data[4..])
     } else {
         solid_union(&data[4..])
