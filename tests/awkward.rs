@@ -152,7 +152,9 @@ fn many_components_some_smaller_than_a_cell() {
     let mesh = shapes::union(&meshes);
     for kind in [BoundingKind::Ellipsoid, BoundingKind::Obb] {
         let (seg, r) = run("components", &mesh, &params(3000, None, kind));
-        assert!(r.tov < 1.0, "components {kind:?}: TOV {}", r.tov);
+        // Measured 0.067 (ellipsoids) and 0.655 (boxes: about ten per ball).
+        let bound = if kind == BoundingKind::Obb { 1.0 } else { 0.3 };
+        assert!(r.tov < bound, "components {kind:?}: TOV {}", r.tov);
         // No volume swallows two pieces (they are at least 2.5 apart).
         for (i, p) in seg.parts.iter().enumerate() {
             let held = pieces.iter().filter(|(_, c)| p.volume.contains(*c)).count();
@@ -172,7 +174,7 @@ fn inward_facing_mesh_gives_the_same_result() {
     let (b, rb) = run("inward", &flipped(&m), &p);
     assert_eq!(bvseg::io::to_json_string(&a), bvseg::io::to_json_string(&b));
     assert_eq!(ra.tov, rb.tov);
-    assert!(ra.tov < 0.8, "TOV {}", ra.tov);
+    assert!(ra.tov < 0.4, "TOV {}", ra.tov);
 }
 
 #[test]
@@ -185,7 +187,7 @@ fn duplicated_and_self_intersecting_shells() {
     // differ in the last digits: the fits see every enclosure point twice.)
     assert_eq!(a.sample_parts, b.sample_parts);
     assert!((a.metrics.tov - b.metrics.tov).abs() < 0.01);
-    assert!(rb.tov < 0.5, "duplicated: TOV {}", rb.tov);
+    assert!(rb.tov < 0.2, "duplicated: TOV {}", rb.tov);
     // Boxes crossing each other: the solid is their union.
     let rot = DMat3::from_rotation_z(0.6);
     let cross = shapes::union(&[
@@ -198,9 +200,9 @@ fn duplicated_and_self_intersecting_shells() {
         &cross,
         &params(3000, None, BoundingKind::Obb),
     );
-    // The verifier's volume for this open-looking but closed-by-edges mesh is its own grid
-    // estimate or the (overcounted) signed volume; TOV must still be modest.
-    assert!(r.tov < 1.0, "crossing boxes: TOV {}", r.tov);
+    // Every edge is matched, so the verifier (like bveval) takes vol(S) as the signed volume,
+    // which counts the overlaps twice: this TOV is understated, and is compared loosely.
+    assert!(r.tov < 0.4, "crossing boxes: TOV {}", r.tov);
 }
 
 #[test]
@@ -223,7 +225,7 @@ fn small_holes() {
     // The holes neither empty the solid nor change much of it.
     let (na, nb) = (a.metrics.samples as f64, b.metrics.samples as f64);
     assert!((na - nb).abs() < 0.05 * na, "samples {na} vs {nb}");
-    assert!(r.tov < 0.5, "holes: TOV {}", r.tov);
+    assert!(r.tov < 0.3, "holes: TOV {}", r.tov);
 }
 
 #[test]
@@ -275,5 +277,5 @@ fn k_larger_than_the_samples_is_a_clear_error() {
     );
     assert_eq!(seg.parts.len(), 25);
     // Parts of about 8 samples each are coarse, but their union still hugs the ball.
-    assert!(r.tov < 1.0, "k = samples/8: TOV {}", r.tov);
+    assert!(r.tov < 0.5, "k = samples/8: TOV {}", r.tov);
 }
