@@ -231,7 +231,7 @@ fn config(n: u32) -> ProptestConfig {
 }
 
 proptest! {
-    #![proptest_config(config(10))]
+    #![proptest_config(config(32))]
 
     /// Samples partitioned, parts connected, volumes hold their parts, union encloses the mesh.
     #[test]
@@ -255,7 +255,7 @@ proptest! {
         check_segmentation(&mesh, &params, &seg)?;
     }
 
-    /// Byte-identical output whatever the thread count.
+    /// Byte-identical output, and identical verification, whatever the thread count.
     #[test]
     fn identical_across_thread_counts(
         prims in solid(),
@@ -272,14 +272,21 @@ proptest! {
             max_k: 6,
             ..Params::default()
         };
+        let opts = VerifyOptions { points: 5000, ..VerifyOptions::default() };
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| segment(&mesh, &params).expect("segments"))
+            pool.install(|| {
+                let seg = segment(&mesh, &params).expect("segments");
+                let vols: Vec<_> = seg.parts.iter().map(|p| p.volume).collect();
+                let report = verify(&mesh, &vols, &opts).expect("verify runs");
+                (seg, report)
+            })
         };
-        let one = run(1);
+        let (one, one_report) = run(1);
         let json = bvseg::io::to_json_string(&one);
         for threads in [2, 4] {
-            let other = run(threads);
+            let (other, report) = run(threads);
+            prop_assert_eq!(&report, &one_report);
             prop_assert_eq!(&other.sample_parts, &one.sample_parts);
             prop_assert_eq!(&other.triangle_parts, &one.triangle_parts);
             prop_assert!(bvseg::io::to_json_string(&other) == json, "JSON differs with {} threads", threads);
