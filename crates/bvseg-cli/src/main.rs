@@ -2,7 +2,8 @@
 //!
 //! Exit codes: 0 on success; 2 on any error (bad input, bad usage, or a file that cannot be
 //! written), with one line on stderr, `bvseg: error: <message>`; 3 with `--strict` when the
-//! tolerances were not met within `--max-k`.
+//! tolerances were not met within `--max-k`; `verify` exits 1 when some triangle escapes the
+//! volumes.
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -13,6 +14,7 @@ mod info;
 mod plot;
 mod progress;
 mod segment;
+mod verify;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -33,6 +35,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Segment every mesh in a directory, in parallel, skipping finished ones.
     Batch(batch::BatchArgs),
+    /// Check a volumes file against a mesh: enclosure of every triangle, TOV and MOV.
+    Verify(verify::VerifyArgs),
 }
 
 /// Exit code when `--strict` was given and the tolerances were not met.
@@ -55,6 +59,7 @@ fn run() -> anyhow::Result<ExitCode> {
         Command::Segment(args) => segment::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Batch(args) => batch::run(&args),
+        Command::Verify(args) => verify::run(&args),
     }
 }
 

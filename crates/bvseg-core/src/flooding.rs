@@ -66,6 +66,49 @@ pub fn is_connected(grid: &Grid, labels: &[u32], solid_components: &[u32]) -> bo
         .all(|(s, &l)| *first.entry((l, solid_components[s])).or_insert(piece[s]) == piece[s])
 }
 
+/// The pairs among `pairs` whose merge keeps every part connected within each component of
+/// the solid: wherever both parts own samples in one component, they must share a face
+/// there. (Two parts of one piece whose volumes merely overlap would otherwise merge into
+/// a part of two separate regions.)
+pub fn connected_merges(
+    grid: &Grid,
+    labels: &[u32],
+    solid_components: &[u32],
+    pairs: &[(u32, u32)],
+) -> Vec<(u32, u32)> {
+    use std::collections::HashSet;
+    let mut owns: HashSet<(u32, u32)> = HashSet::new();
+    let mut touch: HashSet<(u32, u32, u32)> = HashSet::new();
+    for (s, &l) in labels.iter().enumerate() {
+        // Face neighbours are always in the same component.
+        let c = solid_components[s];
+        owns.insert((l, c));
+        for &t in &grid.neighbors[s] {
+            if t != NONE && labels[t as usize] != l {
+                let m = labels[t as usize];
+                touch.insert((l.min(m), l.max(m), c));
+            }
+        }
+    }
+    let mut comps_of: Vec<Vec<u32>> = Vec::new();
+    for &(l, c) in &owns {
+        if comps_of.len() <= l as usize {
+            comps_of.resize(l as usize + 1, Vec::new());
+        }
+        comps_of[l as usize].push(c);
+    }
+    pairs
+        .iter()
+        .copied()
+        .filter(|&(a, b)| {
+            comps_of.get(a as usize).is_none_or(|cs| {
+                cs.iter()
+                    .all(|&c| !owns.contains(&(b, c)) || touch.contains(&(a.min(b), a.max(b), c)))
+            })
+        })
+        .collect()
+}
+
 #[derive(PartialEq)]
 struct Item {
     cost: f64,

@@ -52,6 +52,7 @@ pub mod rng;
 pub mod sampling;
 pub mod shapes;
 pub mod tightening;
+pub mod verify;
 mod volume;
 
 pub use error::Error;

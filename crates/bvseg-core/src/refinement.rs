@@ -28,7 +28,7 @@ use glam::DVec3;
 use std::sync::Arc;
 
 use crate::fitting::{Fit, Fitter};
-use crate::flooding::solid_components;
+use crate::flooding::{connected_merges, solid_components};
 use crate::initialization::{cvt, split};
 use crate::metrics::outside_from_cells;
 use crate::moments::Moments;
@@ -461,7 +461,7 @@ impl Segmenter {
         }
         pairs.sort_unstable();
         pairs.dedup();
-        pairs
+        connected_merges(&self.solid.grid, &s.part.labels, &self.comps, &pairs)
     }
 
     /// TOV and MOV after merging each pair, judged incrementally on the coverage of the

@@ -16,8 +16,13 @@ mod json;
 mod obj;
 mod report;
 mod stl;
+mod volumes_read;
 
 use std::path::Path;
+
+pub use volumes_read::{
+    parse_volumes, read_volumes, ReportedMetrics, VolumesFile, MAX_VOLUMES, MAX_VOLUMES_BYTES,
+};
 
 pub use atomic::write_atomic;
 pub use error::IoError;

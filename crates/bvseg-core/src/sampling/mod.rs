@@ -6,6 +6,7 @@
 //! mesh are implicit: any lattice cell that is not a sample is outside the solid, which is
 //! how the metrics measure outside volume.
 pub mod inside;
+mod shells;
 
 use glam::DVec3;
 
@@ -79,7 +80,8 @@ impl Grid {
     fn from_mesh_with_h(mesh: &Mesh, h: f64, max_cells: f64) -> Result<Self, Error> {
         let (lo, hi) = mesh.bbox();
         let (origin, dims, h) = lattice_for_box(lo, hi, h, max_cells);
-        let inside = inside::inside_cells(mesh, origin, h, dims);
+        let mut inside = inside::inside_cells(mesh, origin, h, dims);
+        shells::mark_sub_cell_shells(mesh, origin, h, dims, &mut inside);
         Ok(Self::from_mask(origin, h, dims, &inside))
     }
 

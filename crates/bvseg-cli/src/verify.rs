@@ -1,0 +1,154 @@
+//! `bvseg verify MESH VOLUMES.json`: an independent check of a volumes file against a mesh
+//! (`bvseg_core::verify`). Exit 0 when every triangle is enclosed, 1 when some point of the
+//! mesh escapes the union of the volumes, 2 on bad input.
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{anyhow, Context};
+use bvseg_core::verify::{verify, VerifyOptions, VerifyReport};
+use bvseg_io::VolumesFile;
+use clap::Args;
+use serde_json::json;
+
+/// Arguments of `bvseg verify`.
+#[derive(Args, Debug)]
+pub struct VerifyArgs {
+    /// Mesh file (.obj).
+    #[arg(value_name = "MESH")]
+    mesh: PathBuf,
+
+    /// Volumes file (bvseg.volumes/1 JSON), as `bvseg segment -o` writes it.
+    #[arg(value_name = "VOLUMES.json")]
+    volumes: PathBuf,
+
+    /// Points of the jittered grid that measures the outside volumes.
+    #[arg(long, value_name = "N", default_value_t = VerifyOptions::default().points)]
+    points: usize,
+
+    /// Seed of the grid's jitter.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
+
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `bvseg verify`.
+pub fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
+    let mesh = bvseg_io::load_mesh(&args.mesh)?;
+    let file = bvseg_io::read_volumes(&args.volumes)?;
+    let opts = VerifyOptions {
+        points: args.points,
+        seed: args.seed,
+        fractions: Some(file.fractions.clone()),
+        ..VerifyOptions::default()
+    };
+    let report =
+        verify(&mesh, &file.volumes, &opts).map_err(|e| anyhow!("{}: {e}", args.mesh.display()))?;
+    let text = if args.json {
+        json_report(args, &file, &report).to_string() + "\n"
+    } else {
+        summary(args, &file, &report)
+    };
+    std::io::stdout()
+        .lock()
+        .write_all(text.as_bytes())
+        .context("cannot write to stdout")?;
+    Ok(if report.all_enclosed() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+fn reported(x: Option<f64>) -> String {
+    x.map(|v| format!("   (file: {v:.4})")).unwrap_or_default()
+}
+
+fn summary(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> String {
+    let mut s = format!(
+        "mesh        {} ({} triangles, {}, vol(S) = {:.6e} {})\n\
+         volumes     {} ({} volumes, {})\n",
+        args.mesh.display(),
+        r.triangles,
+        if r.closed { "closed" } else { "NOT closed" },
+        r.volume,
+        if r.closed { "exact" } else { "grid estimate" },
+        args.volumes.display(),
+        file.volumes.len(),
+        file.kind.as_str(),
+    );
+    if r.all_enclosed() {
+        s += &format!(
+            "enclosure   all {} triangles enclosed ({} in one volume, {} split across volumes, \
+             {} down to the tolerance)\n",
+            r.triangles, r.single, r.split, r.within_tolerance
+        );
+    } else {
+        s += &format!(
+            "enclosure   {} of {} triangles ESCAPE; max escape {:.3e} x diagonal (triangle {})\n",
+            r.unenclosed,
+            r.triangles,
+            r.max_escape_rel,
+            r.worst_triangle.map(|t| t.to_string()).unwrap_or_default()
+        );
+    }
+    s += &format!(
+        "TOV         {:.4} ± {:.4}{}\n",
+        r.tov,
+        r.tov_se,
+        reported(file.reported.tov)
+    );
+    if let Some((mov, se, i)) = r.mov {
+        s += &format!(
+            "MOV         {mov:.4} ± {se:.4} (volume {i}){}\n",
+            reported(file.reported.mov)
+        );
+    }
+    s += &format!(
+        "interior    {:.3} % covered\n\
+         grid        {} x {} x {} points, seed {}\n",
+        100.0 * r.coverage_interior,
+        r.grid[0],
+        r.grid[1],
+        r.grid[2],
+        args.seed
+    );
+    s
+}
+
+fn json_report(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> serde_json::Value {
+    json!({
+        "mesh": args.mesh.display().to_string(),
+        "volumes_file": args.volumes.display().to_string(),
+        "kind": file.kind.as_str(),
+        "k": file.volumes.len(),
+        "enclosed": r.all_enclosed(),
+        "triangles": r.triangles,
+        "triangles_single": r.single,
+        "triangles_split": r.split,
+        "triangles_within_tolerance": r.within_tolerance,
+        "triangles_unenclosed": r.unenclosed,
+        "max_escape_rel": r.max_escape_rel,
+        "worst_triangle": r.worst_triangle,
+        "closed": r.closed,
+        "vol_mesh": r.volume,
+        "vol_mesh_grid": r.volume_grid,
+        "vol_mesh_grid_se": r.volume_grid_se,
+        "tov": r.tov,
+        "tov_se": r.tov_se,
+        "mov": r.mov.map(|m| m.0),
+        "mov_se": r.mov.map(|m| m.1),
+        "mov_index": r.mov.map(|m| m.2),
+        "ov": r.ov,
+        "ov_se": r.ov_se,
+        "coverage_interior": r.coverage_interior,
+        "reported_tov": file.reported.tov,
+        "reported_mov": file.reported.mov,
+        "grid": r.grid,
+        "grid_points": r.grid.iter().product::<usize>(),
+        "seed": args.seed,
+    })
+}

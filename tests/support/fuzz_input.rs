@@ -1,0 +1,128 @@
+//! How the fuzz targets turn bytes into inputs and what they check, shared by
+//! `fuzz/fuzz_targets/*.rs` and the regression replay (`tests/fuzz_regressions.rs`), so that
+//! a saved crashing input is replayed exactly as the fuzzer ran it.
+#![allow(dead_code)]
+use bvseg_core::verify::{verify, VerifyOptions};
+use bvseg_core::{segment, shapes, BoundingKind, Mesh, Params};
+use glam::{DMat3, DVec3};
+
+/// Up to 16 vertices of 3 x i8 and up to 32 triangles of 3 index bytes.
+fn raw_mesh(data: &[u8]) -> Option<Mesh> {
+    let nv = (*data.first()? as usize % 16) + 1;
+    let vb = data.get(1..1 + 3 * nv)?;
+    let v: Vec<DVec3> = vb
+        .chunks_exact(3)
+        .map(|c| DVec3::new(c[0] as i8 as f64, c[1] as i8 as f64, c[2] as i8 as f64))
+        .collect();
+    let t: Vec<[u32; 3]> = data[1 + 3 * nv..]
+        .chunks_exact(3)
+        .take(32)
+        .map(|c| [c[0], c[1], c[2]].map(|i| (i as usize % nv) as u32))
+        .collect();
+    Mesh::new(v, t).ok()
+}
+
+/// A union of up to 4 boxes / ellipsoids / capsules, 8 bytes each.
+fn solid_union(data: &[u8]) -> Option<Mesh> {
+    let f = |b: u8| b as f64 / 32.0;
+    let parts: Vec<Mesh> = data
+        .chunks_exact(8)
+        .take(4)
+        .map(|c| {
+            let at = DVec3::new(f(c[1]), f(c[2]), f(c[3]));
+            let size = DVec3::new(f(c[4]), f(c[5]), f(c[6])) + 0.05;
+            let rot = DMat3::from_euler(glam::EulerRot::XYZ, f(c[7]), 0.5 * f(c[7]), 0.0);
+            match c[0] % 3 {
+                0 => shapes::cuboid(at, size, rot),
+                1 => shapes::ellipsoid(at, size, rot, 8 + (c[7] % 8) as usize),
+                _ => shapes::capsule(at, at + size, 0.2 + 0.1 * f(c[4]), 8),
+            }
+        })
+        .collect();
+    if parts.is_empty() {
+        return None;
+    }
+    Some(shapes::union(&parts))
+}
+
+/// The pipeline target's input: 4 header bytes (samples, k, bounding kind, mode), then raw
+/// geometry (mode even) or a union of solids (mode odd).
+pub fn pipeline_case(data: &[u8]) -> Option<(Mesh, Params)> {
+    if data.len() < 4 {
+        return None;
+    }
+    let k = match data[1] % 8 {
+        0 => None,
+        k => Some(k as usize),
+    };
+    let bounding = [
+        BoundingKind::Ellipsoid,
+        BoundingKind::Obb,
+        BoundingKind::Mixed,
+    ][data[2] as usize % 3];
+    let mesh = if data[3] & 1 == 0 {
+        raw_mesh(&data[4..])
+    } else {
+        solid_union(&data[4..])
+    };
+    let params = Params {
+        samples: 100 + data[0] as usize,
+        k,
+        bounding,
+        max_k: 6,
+        seed: data[3] as u64,
+        ..Params::default()
+    };
+    Some((mesh?, params))
+}
+
+/// Segments (errors are fine: bad input) and checks that every triangle is enclosed, by the
+/// segmentation's own assignment and by the independent verifier.
+pub fn check_pipeline(mesh: &Mesh, params: &Params) {
+    let Ok(seg) = segment(mesh, params) else {
+        return;
+    };
+    let vols: Vec<_> = seg.parts.iter().map(|p| p.volume).collect();
+    for (t, &p) in seg.triangle_parts.iter().enumerate() {
+        for c in mesh.corners(t) {
+            assert!(
+                vols[p as usize].contains(c),
+                "triangle {t} escapes part {p}"
+            );
+        }
+    }
+    let opts = VerifyOptions {
+        points: 1000,
+        ..VerifyOptions::default()
+    };
+    if let Ok(r) = verify(mesh, &vols, &opts) {
+        assert!(r.all_enclosed(), "verify: {r:?}");
+    }
+}
+
+/// OBJ loading: a mesh or a one-line error.
+pub fn check_obj(data: &[u8]) {
+    match bvseg_io::load_obj_from_bytes(data, "fuzz.obj") {
+        Ok(mesh) => {
+            let _ = mesh.bbox();
+            let _ = mesh.signed_volume();
+        }
+        Err(e) => assert!(!e.to_string().contains('\n')),
+    }
+}
+
+/// The volumes reader, and the verifier on whatever it accepts.
+pub fn check_volumes_json(data: &[u8]) {
+    match bvseg_io::parse_volumes(data, "fuzz.json") {
+        Ok(file) => {
+            let mesh = shapes::cuboid(DVec3::ZERO, DVec3::new(1.0, 0.5, 0.25), DMat3::IDENTITY);
+            let opts = VerifyOptions {
+                points: 2000,
+                fractions: Some(file.fractions.clone()),
+                ..VerifyOptions::default()
+            };
+            let _ = verify(&mesh, &file.volumes, &opts);
+        }
+        Err(e) => assert!(!e.to_string().contains('\n')),
+    }
+}
