@@ -1,0 +1,28 @@
+//! # bvseg-viewer
+//!
+//! An interactive viewer for bvseg, one eframe app for the desktop and the browser. It runs
+//! the real core ([`bvseg_core::Segmenter`]) a bounded amount per frame, so the view follows
+//! the refinement live and the UI never freezes, even in a page without threads.
+//!
+//! - [`app`]: the [`ViewerApp`] (panels, controls, input and output).
+//! - [`session`]: one segmentation run, stepped under a time budget, with its history.
+//! - [`meshes`]: the bundled sample meshes and the one function that turns file bytes into a mesh.
+//! - [`scene`], [`camera`], [`render`]: the 3D view (CPU geometry, orbit camera, glow renderer).
+//! - [`plot`]: TOV and MOV against k.
+//! - [`platform`]: what differs between native and web (reporting, files).
+#![warn(missing_docs)]
+
+pub mod app;
+pub mod camera;
+pub mod meshes;
+pub mod platform;
+pub mod plot;
+pub mod render;
+pub mod scene;
+pub mod session;
+#[cfg(target_arch = "wasm32")]
+mod web;
+
+pub use app::{Settings, StartOptions, Status, ViewerApp};
+pub use meshes::{load_mesh_bytes, BundledMesh, BUNDLED};
+pub use session::{Session, Snapshot};
