@@ -5,7 +5,8 @@
 //! the refinement live and the UI never freezes, even in a page without threads.
 //!
 //! - [`app`]: the [`ViewerApp`] (panels, controls, input and output).
-//! - [`session`]: one segmentation run, stepped under a time budget, with its history.
+//! - [`session`]: one segmentation run, stepped under a time budget, with its history;
+//!   [`budget`] sizes each frame's share of the work.
 //! - [`meshes`]: the bundled sample meshes and the one function that turns file bytes into a mesh.
 //! - [`scene`], [`camera`], [`render`]: the 3D view (CPU geometry, orbit camera, glow renderer).
 //! - [`plot`]: TOV and MOV against k.
@@ -13,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod app;
+pub mod budget;
 pub mod camera;
 pub mod meshes;
 pub mod platform;

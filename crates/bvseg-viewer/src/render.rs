@@ -143,11 +143,14 @@ impl Renderer {
     fn upload(&mut self, gl: &glow::Context, g: &Geometry) {
         let data = [&g.opaque, &g.lines, &g.translucent];
         for (b, d) in self.buffers.iter_mut().zip(data) {
-            let bytes: Vec<u8> = d.iter().flat_map(|x| x.to_le_bytes()).collect();
             // SAFETY: the buffer belongs to this renderer; the data is copied by the driver.
             unsafe {
                 gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.vbo));
-                gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, &bytes, glow::DYNAMIC_DRAW);
+                gl.buffer_data_u8_slice(
+                    glow::ARRAY_BUFFER,
+                    bytemuck::cast_slice(d.as_slice()),
+                    glow::DYNAMIC_DRAW,
+                );
             }
             b.count = (d.len() / VERTEX_FLOATS) as i32;
         }

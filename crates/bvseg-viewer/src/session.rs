@@ -53,6 +53,8 @@ pub struct Session {
     snapshots: Vec<Snapshot>,
     /// Time spent inside the core so far (not counting the frames in between).
     busy: Duration,
+    /// Calls of [`Session::advance`] (frames of the run).
+    calls: usize,
     started: Instant,
     wall: Option<Duration>,
 }
@@ -79,6 +81,7 @@ impl Session {
             samples: 0,
             snapshots: Vec::new(),
             busy: Duration::ZERO,
+            calls: 0,
             started: Instant::now(),
             wall: None,
         }
@@ -87,6 +90,7 @@ impl Session {
     /// Do at least one unit of work (sampling, or one core step), and more while `budget` lasts.
     pub fn advance(&mut self, budget: Duration) -> Progress {
         let t0 = Instant::now();
+        self.calls += 1;
         loop {
             let p = self.advance_one();
             if p != Progress::Running || t0.elapsed() >= budget {
@@ -232,6 +236,11 @@ impl Session {
     /// Time spent in the core.
     pub fn busy(&self) -> Duration {
         self.busy
+    }
+
+    /// Number of [`Session::advance`] calls so far (the frames of the run).
+    pub fn calls(&self) -> usize {
+        self.calls
     }
 
     /// Wall-clock time from the start to the end of the run, or so far.

@@ -1,0 +1,483 @@
+//! The viewer app: controls on the left, the 3D view in the middle, statistics and parts on
+//! the right. Each frame advances the running [`Session`] by a time budget, then draws.
+use std::sync::{Arc, Mutex};
+
+use bvseg_core::{BoundingKind, Mesh, Params, Segmentation};
+use eframe::egui;
+use eframe::glow;
+use web_time::Instant;
+
+use crate::budget::FrameBudget;
+use crate::camera::OrbitCamera;
+use crate::meshes::{self, BUNDLED};
+use crate::platform::{Inbox, Report, Reporter};
+use crate::render::Renderer;
+use crate::scene::{Display, Geometry, MeshGeometry};
+use crate::session::{Progress, Session, Snapshot};
+
+mod panels;
+mod view;
+
+/// The controls of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Bounding-volume kind.
+    pub bounding: BoundingKind,
+    /// Fixed number of parts instead of the tolerance loop.
+    pub fixed_k: bool,
+    /// The fixed k (when `fixed_k`).
+    pub k: usize,
+    /// Tolerance on TOV (sigma_G).
+    pub tov: f64,
+    /// Tolerance on MOV (sigma_L).
+    pub mov: f64,
+    /// Largest k of the tolerance loop.
+    pub max_k: usize,
+    /// Target number of interior samples.
+    pub samples: usize,
+    /// Seed of the initialisation.
+    pub seed: u64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let p = Params::default();
+        Self {
+            bounding: p.bounding,
+            fixed_k: false,
+            k: 8,
+            tov: p.tov,
+            mov: p.mov,
+            max_k: p.max_k,
+            samples: p.samples,
+            seed: p.seed,
+        }
+    }
+}
+
+impl Settings {
+    /// The core's parameters for these settings.
+    pub fn params(&self) -> Params {
+        Params {
+            samples: self.samples,
+            seed: self.seed,
+            bounding: self.bounding,
+            k: self.fixed_k.then_some(self.k),
+            tov: self.tov,
+            mov: self.mov,
+            max_k: self.max_k,
+            ..Params::default()
+        }
+    }
+}
+
+/// Where the app is.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Status {
+    /// No run yet (or the mesh changed).
+    Idle,
+    /// A run is going.
+    Running,
+    /// The last run finished.
+    Done,
+    /// The last run was cancelled.
+    Cancelled,
+    /// Loading or running failed; the message.
+    Failed(String),
+}
+
+/// The mesh the app starts with.
+pub enum StartMesh {
+    /// A bundled mesh, by name.
+    Bundled(String),
+    /// A mesh already loaded (the native command line's argument).
+    Loaded {
+        /// Its name (file name).
+        name: String,
+        /// The mesh.
+        mesh: Mesh,
+    },
+}
+
+/// How the app starts.
+pub struct StartOptions {
+    /// The first mesh.
+    pub mesh: StartMesh,
+    /// Run with the default settings right away.
+    pub autorun: bool,
+    /// Told when a run ends or fails.
+    pub reporter: Option<Reporter>,
+}
+
+impl Default for StartOptions {
+    fn default() -> Self {
+        Self {
+            mesh: StartMesh::Bundled(BUNDLED[0].name.to_string()),
+            autorun: false,
+            reporter: None,
+        }
+    }
+}
+
+/// A loaded mesh with what the view needs of it.
+struct Model {
+    name: String,
+    mesh: Arc<Mesh>,
+    geometry: Arc<MeshGeometry>,
+}
+
+/// What the current scene geometry was built from; rebuilt when this changes.
+#[derive(Debug, Clone, PartialEq)]
+struct SceneKey {
+    model: u64,
+    run: u64,
+    snapshot: Option<usize>,
+    final_colours: bool,
+    selected: Option<usize>,
+    display: Display,
+}
+
+type Gpu = Arc<Mutex<Option<Result<Renderer, String>>>>;
+
+/// The viewer.
+pub struct ViewerApp {
+    settings: Settings,
+    model: Option<Model>,
+    model_id: u64,
+    session: Option<Session>,
+    run_id: u64,
+    status: Status,
+    /// Step shown; `None` follows the latest.
+    history_pos: Option<usize>,
+    selected_part: Option<usize>,
+    display: Display,
+    camera: OrbitCamera,
+    gpu: Gpu,
+    scene: Option<(SceneKey, u64, Arc<Geometry>)>,
+    generation: u64,
+    message: Option<String>,
+    pending_run: bool,
+    reporter: Option<Reporter>,
+    inbox: Inbox,
+    view_rect: Option<egui::Rect>,
+    budget: FrameBudget,
+    #[cfg(not(target_arch = "wasm32"))]
+    native: NativeDialogs,
+}
+
+/// The native "open" and "save" path prompts (a file dialog crate would pull in a GUI
+/// toolkit or D-Bus; a path field is enough, and drag and drop works too).
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(Default)]
+struct NativeDialogs {
+    open: Option<String>,
+    save: Option<String>,
+}
+
+impl ViewerApp {
+    /// A new app, starting as `start` says.
+    pub fn new(start: StartOptions) -> Self {
+        let mut app = Self {
+            settings: Settings::default(),
+            model: None,
+            model_id: 0,
+            session: None,
+            run_id: 0,
+            status: Status::Idle,
+            history_pos: None,
+            selected_part: None,
+            display: Display::default(),
+            camera: OrbitCamera::framing(1.0),
+            gpu: Arc::new(Mutex::new(None)),
+            scene: None,
+            generation: 0,
+            message: None,
+            pending_run: false,
+            reporter: start.reporter,
+            inbox: Inbox::default(),
+            view_rect: None,
+            budget: FrameBudget::default(),
+            #[cfg(not(target_arch = "wasm32"))]
+            native: NativeDialogs::default(),
+        };
+        match start.mesh {
+            StartMesh::Bundled(name) => match meshes::bundled(&name) {
+                Some(b) => app.load_bytes(b.file, b.bytes),
+                None => {
+                    let names: Vec<&str> = BUNDLED.iter().map(|m| m.name).collect();
+                    app.fail(format!(
+                        "unknown bundled mesh '{name}' (bundled: {})",
+                        names.join(", ")
+                    ));
+                }
+            },
+            StartMesh::Loaded { name, mesh } => app.set_model(name, mesh),
+        }
+        app.pending_run = start.autorun && app.model.is_some();
+        app
+    }
+
+    /// The controls.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The controls, to change them.
+    pub fn settings_mut(&mut self) -> &mut Settings {
+        &mut self.settings
+    }
+
+    /// Where the app is.
+    pub fn status(&self) -> &Status {
+        &self.status
+    }
+
+    /// The current (or last) run.
+    pub fn session(&self) -> Option<&Session> {
+        self.session.as_ref()
+    }
+
+    /// The last run's result.
+    pub fn result(&self) -> Option<&Segmentation> {
+        self.session.as_ref().and_then(Session::result)
+    }
+
+    /// Name of the loaded mesh.
+    pub fn mesh_name(&self) -> Option<&str> {
+        self.model.as_ref().map(|m| m.name.as_str())
+    }
+
+    /// The highlighted part.
+    pub fn selected_part(&self) -> Option<usize> {
+        self.selected_part
+    }
+
+    /// Index of the history step shown.
+    pub fn shown_step(&self) -> Option<usize> {
+        let n = self.session.as_ref()?.snapshots().len();
+        (n > 0).then(|| self.history_pos.unwrap_or(n - 1).min(n - 1))
+    }
+
+    /// The display settings.
+    pub fn display(&self) -> Display {
+        self.display
+    }
+
+    /// The 3D view's rectangle in the last frame, in points.
+    pub fn view_rect(&self) -> Option<egui::Rect> {
+        self.view_rect
+    }
+
+    /// Loads a mesh file's bytes (any way in: menu, dialog, drop), reporting errors in the UI.
+    pub fn load_bytes(&mut self, name: &str, bytes: &[u8]) {
+        match meshes::load_mesh_bytes(bytes, name) {
+            Ok(mesh) => self.set_model(name.to_string(), mesh),
+            Err(e) => self.fail(e),
+        }
+    }
+
+    fn set_model(&mut self, name: String, mesh: Mesh) {
+        let geometry = Arc::new(MeshGeometry::new(&mesh));
+        self.camera = OrbitCamera::framing(geometry.radius);
+        self.model = Some(Model {
+            name,
+            mesh: Arc::new(mesh),
+            geometry,
+        });
+        self.model_id += 1;
+        self.session = None;
+        self.status = Status::Idle;
+        self.history_pos = None;
+        self.selected_part = None;
+        self.message = None;
+    }
+
+    fn fail(&mut self, msg: String) {
+        self.message = Some(msg.clone());
+        self.status = Status::Failed(msg.clone());
+        if let Some(r) = self.reporter.as_mut() {
+            r(&Report::Error(msg));
+        }
+    }
+
+    /// Starts a run of the loaded mesh with the current settings.
+    pub fn run(&mut self) {
+        let Some(model) = &self.model else {
+            return;
+        };
+        self.session = Some(Session::new(model.mesh.clone(), self.settings.params()));
+        self.run_id += 1;
+        self.status = Status::Running;
+        self.history_pos = None;
+        self.selected_part = None;
+        self.message = None;
+    }
+
+    /// Stops the run; what it did so far stays visible.
+    pub fn cancel(&mut self) {
+        if self.status == Status::Running {
+            self.status = Status::Cancelled;
+        }
+    }
+
+    /// Advances the running session by one frame's budget (see [`crate::budget`]).
+    fn advance(&mut self) {
+        let Some(s) = self
+            .session
+            .as_mut()
+            .filter(|_| self.status == Status::Running)
+        else {
+            self.budget.idle();
+            return;
+        };
+        let t0 = Instant::now();
+        let progress = s.advance(self.budget.start(t0));
+        self.budget.worked(t0.elapsed());
+        match progress {
+            Progress::Running => {}
+            Progress::Done => {
+                self.status = Status::Done;
+                if let (Some(res), Some(r)) = (s.result(), self.reporter.as_mut()) {
+                    let view = self
+                        .view_rect
+                        .map(|v| [v.min.x, v.min.y, v.width(), v.height()]);
+                    let times = [s.wall().as_secs_f64(), s.busy().as_secs_f64()];
+                    let json = summary_json(res, s.params(), times, s.calls(), view);
+                    r(&Report::Done(json));
+                }
+            }
+            Progress::Failed => {
+                let msg = s
+                    .error()
+                    .map_or_else(|| "the run failed".to_string(), |e| e.to_string());
+                self.fail(msg);
+            }
+        }
+    }
+
+    /// One frame of the UI (without eframe, so the tests can drive it).
+    pub fn ui(&mut self, ctx: &egui::Context) {
+        self.take_files(ctx);
+        if std::mem::take(&mut self.pending_run) {
+            self.run();
+        }
+        self.advance();
+        if self.status == Status::Running {
+            ctx.request_repaint();
+        }
+        egui::TopBottomPanel::top("menu").show(ctx, |ui| self.menu_bar(ui));
+        egui::SidePanel::left("controls")
+            .resizable(true)
+            .default_width(250.0)
+            .show(ctx, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+            });
+        egui::SidePanel::right("statistics")
+            .resizable(true)
+            .default_width(250.0)
+            .show(ctx, |ui| self.statistics(ui));
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ctx, |ui| self.view(ui));
+        #[cfg(not(target_arch = "wasm32"))]
+        self.native_dialogs(ctx);
+    }
+
+    fn take_files(&mut self, ctx: &egui::Context) {
+        let mut files = self.inbox.take();
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        for f in dropped {
+            if let Some(bytes) = f.bytes {
+                files.push((f.name, bytes.to_vec()));
+            } else if let Some(path) = f.path {
+                let name = path.file_name().map_or_else(
+                    || path.display().to_string(),
+                    |n| n.to_string_lossy().into(),
+                );
+                match std::fs::read(&path) {
+                    Ok(b) => files.push((name, b)),
+                    Err(e) => self.fail(format!("{}: cannot read: {e}", path.display())),
+                }
+            }
+        }
+        // With several files dropped at once, the last one wins.
+        if let Some((name, bytes)) = files.pop() {
+            self.load_bytes(&name, &bytes);
+        }
+    }
+
+    fn shown_snapshot(&self) -> Option<&Snapshot> {
+        let i = self.shown_step()?;
+        self.session.as_ref()?.snapshots().get(i)
+    }
+
+    /// Whether the shown step is the result's final step (so the parts' figures are final).
+    fn showing_result(&self) -> bool {
+        let (Some(s), Some(i)) = (&self.session, self.shown_step()) else {
+            return false;
+        };
+        s.result().is_some() && i + 1 == s.snapshots().len()
+    }
+
+    /// Frees the GPU objects (the app is closing).
+    pub fn destroy_gpu(&mut self, gl: Option<&glow::Context>) {
+        if let (Some(gl), Ok(mut gpu)) = (gl, self.gpu.lock()) {
+            if let Some(Ok(r)) = gpu.take() {
+                r.destroy(gl);
+            }
+        }
+    }
+}
+
+impl eframe::App for ViewerApp {
+    fn update(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.ui(ctx);
+    }
+
+    fn on_exit(&mut self, gl: Option<&glow::Context>) {
+        self.destroy_gpu(gl);
+    }
+}
+
+/// The summary of a finished run as one JSON object: `k`, `tov`, `mov`, `f` (the page
+/// contract), then `samples`, `kind`, `met` (the tolerances were met; `null` with a fixed k),
+/// `time_s` and `core_s` (`times`: the run's wall time, and the part of it spent in the core
+/// rather than drawing), `frames` (frames of the run) and `view` (the 3D view's rectangle in CSS pixels, so that a browser
+/// test knows where to look).
+pub fn summary_json(
+    res: &Segmentation,
+    params: &Params,
+    times: [f64; 2],
+    frames: usize,
+    view: Option<[f32; 4]>,
+) -> String {
+    let num = |x: f64| {
+        if x.is_finite() {
+            format!("{x}")
+        } else {
+            "null".into()
+        }
+    };
+    let m = res.metrics;
+    let met = match params.k {
+        Some(_) => "null".to_string(),
+        None => (m.tov < params.tov && m.mov < params.mov).to_string(),
+    };
+    let view = view.map_or("null".into(), |v| {
+        format!("[{},{},{},{}]", v[0], v[1], v[2], v[3])
+    });
+    format!(
+        "{{\"k\":{},\"tov\":{},\"mov\":{},\"f\":{},\"samples\":{},\"kind\":\"{}\",\"met\":{},\"time_s\":{},\"core_s\":{},\"frames\":{},\"view\":{}}}",
+        m.k,
+        num(m.tov),
+        num(m.mov),
+        num(m.f),
+        m.samples,
+        res.kind.as_str(),
+        met,
+        num(times[0]),
+        num(times[1]),
+        frames,
+        view
+    )
+}
