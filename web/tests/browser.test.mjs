@@ -204,6 +204,38 @@ test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async 
   await page.close();
 });
 
+test('clicking the controls in the page runs with them', async () => {
+  const page = await context.newPage();
+  await page.goto(`${base}/index.html?mesh=bunny`);
+  // eframe's web backend has no accessibility tree: the app tells where it drew a widget.
+  await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Run'), null, {
+    timeout: 60_000,
+  });
+  const click = async (label) => {
+    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+    assert.equal(r.length, 4, `no widget "${label}"`);
+    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+    // Let egui take the click in its next frame.
+    await page.waitForTimeout(300);
+  };
+  await click('Boxes');
+  await click('Fixed k');
+  assert.equal(await page.title(), 'bvseg', 'nothing ran yet');
+  await click('Run');
+  await page.waitForFunction(
+    () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+    null,
+    { timeout: TIMEOUT_MS, polling: 100 },
+  );
+  assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
+  const r = JSON.parse(await page.locator('#bvseg-result').textContent());
+  // The run used what was clicked: boxes, and the fixed k of the controls (8).
+  assert.equal(r.kind, 'obb');
+  assert.equal(r.met, null);
+  assert.equal(r.k, 8);
+  await page.close();
+});
+
 test('an unknown mesh name ends in "bvseg: error"', async () => {
   const { page, title, text } = await runPage('mesh=no-such-mesh&autorun=1');
   assert.ok(title.startsWith('bvseg: error'), title);

@@ -36,7 +36,17 @@ impl Inbox {
 }
 
 #[cfg(target_arch = "wasm32")]
-pub use web::{download, pick_file};
+pub use web::{download, pick_file, widget_rect};
+
+/// Remembers where the widget called `label` was drawn in this frame. eframe's web backend has
+/// no accessibility tree, so a browser test finds the widgets it clicks through this record
+/// (natively, AccessKit does that and this does nothing).
+pub fn note_widget(label: &str, rect: eframe::egui::Rect) {
+    #[cfg(target_arch = "wasm32")]
+    web::note_widget(label, rect);
+    #[cfg(not(target_arch = "wasm32"))]
+    let _ = (label, rect);
+}
 
 #[cfg(target_arch = "wasm32")]
 mod web {
@@ -44,6 +54,28 @@ mod web {
     use wasm_bindgen::{JsCast, JsValue};
 
     use super::Inbox;
+
+    thread_local! {
+        static WIDGETS: std::cell::RefCell<Vec<(String, [f32; 4])>> =
+            const { std::cell::RefCell::new(Vec::new()) };
+    }
+
+    pub fn note_widget(label: &str, r: egui::Rect) {
+        let rect = [r.min.x, r.min.y, r.width(), r.height()];
+        WIDGETS.with(|w| {
+            let mut w = w.borrow_mut();
+            match w.iter_mut().find(|(l, _)| l == label) {
+                Some(entry) => entry.1 = rect,
+                None => w.push((label.to_string(), rect)),
+            }
+        });
+    }
+
+    /// Where the widget called `label` was last drawn: `[x, y, width, height]` in CSS pixels
+    /// of the canvas.
+    pub fn widget_rect(label: &str) -> Option<[f32; 4]> {
+        WIDGETS.with(|w| w.borrow().iter().find(|(l, _)| l == label).map(|e| e.1))
+    }
 
     fn js_err(e: JsValue) -> String {
         e.as_string().unwrap_or_else(|| format!("{e:?}"))

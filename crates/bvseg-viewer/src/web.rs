@@ -3,7 +3,8 @@
 //! `index.html?mesh=NAME&autorun=1` loads the bundled mesh `NAME` and runs it with the default
 //! settings. When a run ends, its summary (JSON, see [`crate::app::summary_json`]) is written
 //! into `<pre id="bvseg-result">` and `document.title` starts with `bvseg: done`; on an error
-//! the title is `bvseg: error: <message>`. Scripts wait for the title.
+//! the title is `bvseg: error: <message>`. Scripts wait for the title, and find the controls
+//! to click with [`widget_rect`].
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
@@ -37,6 +38,13 @@ fn report(r: &Report) {
             set_title(&format!("bvseg: error: {msg}"));
         }
     }
+}
+
+/// Where the widget called `label` (such as `Run`, `Boxes`, `Fixed k`) was last drawn, as
+/// `[x, y, width, height]` in CSS pixels of the canvas, for scripts that click it.
+#[wasm_bindgen(js_name = widgetRect)]
+pub fn widget_rect(label: &str) -> Option<Vec<f32>> {
+    crate::platform::widget_rect(label).map(|r| r.to_vec())
 }
 
 /// Starts the viewer in the canvas with id `canvas_id`, reading `mesh` and `autorun` from the

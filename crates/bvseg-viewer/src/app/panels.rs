@@ -5,6 +5,7 @@ use eframe::egui::{self, Color32, RichText};
 
 use super::{Status, ViewerApp};
 use crate::meshes::BUNDLED;
+use crate::platform::note_widget;
 use crate::scene::{self, VolumeStyle};
 
 impl ViewerApp {
@@ -175,14 +176,21 @@ impl ViewerApp {
             ui.label("Bounding volumes");
             ui.horizontal_wrapped(|ui| {
                 let s = &mut self.settings;
-                ui.radio_value(&mut s.bounding, BoundingKind::Ellipsoid, "Ellipsoids");
-                ui.radio_value(&mut s.bounding, BoundingKind::Obb, "Boxes");
-                ui.radio_value(&mut s.bounding, BoundingKind::Mixed, "Mixed");
+                for (kind, label) in [
+                    (BoundingKind::Ellipsoid, "Ellipsoids"),
+                    (BoundingKind::Obb, "Boxes"),
+                    (BoundingKind::Mixed, "Mixed"),
+                ] {
+                    let r = ui.radio_value(&mut s.bounding, kind, label);
+                    note_widget(label, r.rect);
+                }
             });
             ui.horizontal(|ui| {
                 let s = &mut self.settings;
-                ui.radio_value(&mut s.fixed_k, false, "Tolerances");
-                ui.radio_value(&mut s.fixed_k, true, "Fixed k");
+                for (fixed, label) in [(false, "Tolerances"), (true, "Fixed k")] {
+                    let r = ui.radio_value(&mut s.fixed_k, fixed, label);
+                    note_widget(label, r.rect);
+                }
             });
             egui::Grid::new("params").num_columns(2).show(ui, |ui| {
                 let s = &mut self.settings;
@@ -220,13 +228,14 @@ impl ViewerApp {
             });
         });
         ui.horizontal(|ui| {
-            if ui
-                .add_enabled(idle && self.model.is_some(), egui::Button::new("Run"))
-                .clicked()
-            {
+            let run = ui.add_enabled(idle && self.model.is_some(), egui::Button::new("Run"));
+            note_widget("Run", run.rect);
+            if run.clicked() {
                 self.run();
             }
-            if ui.add_enabled(!idle, egui::Button::new("Cancel")).clicked() {
+            let cancel = ui.add_enabled(!idle, egui::Button::new("Cancel"));
+            note_widget("Cancel", cancel.rect);
+            if cancel.clicked() {
                 self.cancel();
             }
         });
