@@ -231,7 +231,14 @@ fn place(v: &BoundingVolume, origin: DVec3, t: Vec3) -> Vec3 {
     (v.center - origin + v.axes * (v.radii * t.as_dvec3())).as_vec3()
 }
 
-fn volume_surface(out: &mut Vec<f32>, v: &BoundingVolume, origin: DVec3, c: [f32; 3], a: f32) {
+/// Appends the triangles of `v`'s surface, relative to `origin`, in colour `c` with alpha `a`.
+pub(crate) fn volume_surface(
+    out: &mut Vec<f32>,
+    v: &BoundingVolume,
+    origin: DVec3,
+    c: [f32; 3],
+    a: f32,
+) {
     match v.shape {
         Shape::Ellipsoid => {
             for tri in sphere_triangles() {

@@ -4,7 +4,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use bvseg_core::{BoundingKind, Shape};
-use bvseg_viewer::app::{StartMesh, StartOptions, Status, ViewerApp};
+use bvseg_viewer::app::{Export, StartMesh, StartOptions, Status, ViewerApp};
 use bvseg_viewer::platform::Report;
 use egui_kittest::kittest::{Key, Queryable};
 use egui_kittest::Harness;
@@ -73,9 +73,9 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     assert!(res.metrics.samples > 3000 && res.metrics.samples < 5000);
 
     // The reporter got the page's summary for this run.
-    let reports = reports.borrow();
-    let Some(Report::Done(json)) = reports.last() else {
-        panic!("no summary: {reports:?}");
+    let last = reports.borrow().last().cloned();
+    let Some(Report::Done(json)) = last else {
+        panic!("no summary: {last:?}");
     };
     assert!(
         json.starts_with(&format!("{{\"k\":5,\"tov\":{},", res.metrics.tov)),
@@ -108,6 +108,36 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     h.get_by_label("Latest").click();
     h.run_steps(2);
     assert_eq!(h.state().shown_step(), Some(n - 1));
+
+    // Result -> Save GLB… asks for a path and writes the file there.
+    let json = h.state().export_bytes(Export::Json).unwrap();
+    assert_eq!(json, bvseg_io::to_json_string(result_of(&h)).into_bytes());
+    let dir = std::env::temp_dir().join(format!("bvseg-viewer-panels-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("dog.glb");
+    h.get_by_label("Result").click();
+    h.run_steps(2);
+    h.get_by_label("Save GLB…").click();
+    h.run_steps(2);
+    let field = "Write the mesh and the volumes (binary glTF) to:";
+    h.get_by_label(field).focus();
+    h.run_steps(1);
+    // The field holds a default name, with the cursor at its end: clear it.
+    h.get_by_label(field).press_keys(&[Key::Backspace; 40]);
+    h.run_steps(1);
+    h.get_by_label(field).type_text(out.to_str().unwrap());
+    h.run_steps(1);
+    h.get_by_label("Save").click();
+    h.run_steps(2);
+    let glb =
+        std::fs::read(&out).unwrap_or_else(|e| panic!("no GLB ({e}): {:?}", h.state().status()));
+    assert_eq!(glb, h.state().export_bytes(Export::Glb).unwrap());
+    assert_eq!(&glb[..4], b"glTF");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn result_of<'a>(h: &'a Harness<'_, ViewerApp>) -> &'a bvseg_core::Segmentation {
+    h.state().result().unwrap()
 }
 
 #[test]

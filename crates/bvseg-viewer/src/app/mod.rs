@@ -171,7 +171,50 @@ pub struct ViewerApp {
 #[derive(Default)]
 struct NativeDialogs {
     open: Option<String>,
-    save: Option<String>,
+    save: Option<(String, Export)>,
+}
+
+/// What the Result menu writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Export {
+    /// The `bvseg.volumes/1` JSON document.
+    Json,
+    /// The mesh and the volumes as binary glTF.
+    Glb,
+}
+
+impl Export {
+    fn extension(self) -> &'static str {
+        match self {
+            Export::Json => "json",
+            Export::Glb => "glb",
+        }
+    }
+
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    fn mime(self) -> &'static str {
+        match self {
+            Export::Json => "application/json",
+            Export::Glb => "model/gltf-binary",
+        }
+    }
+
+    fn menu_label(self) -> &'static str {
+        match (self, cfg!(target_arch = "wasm32")) {
+            (Export::Json, true) => "Download JSON",
+            (Export::Json, false) => "Save JSON…",
+            (Export::Glb, true) => "Download GLB",
+            (Export::Glb, false) => "Save GLB…",
+        }
+    }
+
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
+    fn what(self) -> &'static str {
+        match self {
+            Export::Json => "Write the volumes (bvseg.volumes/1 JSON) to:",
+            Export::Glb => "Write the mesh and the volumes (binary glTF) to:",
+        }
+    }
 }
 
 impl ViewerApp {

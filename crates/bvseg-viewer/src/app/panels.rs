@@ -3,7 +3,7 @@
 use bvseg_core::{BoundingKind, StepKind};
 use eframe::egui::{self, Color32, RichText};
 
-use super::{Status, ViewerApp};
+use super::{Export, Status, ViewerApp};
 use crate::meshes::BUNDLED;
 use crate::platform::note_widget;
 use crate::scene::{self, VolumeStyle};
@@ -26,17 +26,15 @@ impl ViewerApp {
             });
             let has_result = self.result().is_some();
             ui.menu_button("Result", |ui| {
-                let label = if cfg!(target_arch = "wasm32") {
-                    "Download JSON"
-                } else {
-                    "Save JSON…"
-                };
-                if ui
-                    .add_enabled(has_result, egui::Button::new(label))
-                    .clicked()
-                {
-                    self.save_json();
-                    ui.close_menu();
+                for export in [Export::Json, Export::Glb] {
+                    let label = export.menu_label();
+                    if ui
+                        .add_enabled(has_result, egui::Button::new(label))
+                        .clicked()
+                    {
+                        self.export(export);
+                        ui.close_menu();
+                    }
                 }
             });
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
@@ -85,29 +83,40 @@ impl ViewerApp {
         }
     }
 
-    fn json_name(&self) -> String {
+    fn export_name(&self, export: Export) -> String {
         let stem = self
             .model
             .as_ref()
             .map(|m| m.name.as_str())
             .and_then(|n| std::path::Path::new(n).file_stem())
             .map_or_else(|| "bvseg".into(), |s| s.to_string_lossy().into_owned());
-        format!("{stem}.volumes.json")
+        format!("{stem}.volumes.{}", export.extension())
     }
 
-    fn save_json(&mut self) {
+    /// The file content of `export` for the current result.
+    pub fn export_bytes(&self, export: Export) -> Option<Vec<u8>> {
+        let res = self.result()?;
+        Some(match export {
+            Export::Json => bvseg_io::to_json_string(res).into_bytes(),
+            Export::Glb => {
+                let volumes: Vec<_> = res.parts.iter().map(|p| p.volume).collect();
+                crate::glb::glb(&self.model.as_ref()?.geometry, &volumes)
+            }
+        })
+    }
+
+    /// Downloads the result (web) or asks where to save it (native).
+    fn export(&mut self, export: Export) {
         #[cfg(target_arch = "wasm32")]
-        if let Some(res) = self.result() {
-            let json = bvseg_io::to_json_string(res);
-            if let Err(e) =
-                crate::platform::download(&self.json_name(), "application/json", json.as_bytes())
-            {
+        if let Some(bytes) = self.export_bytes(export) {
+            let name = self.export_name(export);
+            if let Err(e) = crate::platform::download(&name, export.mime(), &bytes) {
                 self.fail(e);
             }
         }
         #[cfg(not(target_arch = "wasm32"))]
         {
-            self.native.save = Some(self.json_name());
+            self.native.save = Some((self.export_name(export), export));
         }
     }
 
@@ -119,11 +128,11 @@ impl ViewerApp {
             egui::Window::new("Open mesh")
                 .collapsible(false)
                 .show(ctx, |ui| {
-                    ui.label(format!(
+                    let l = ui.label(format!(
                         "Path of a mesh file ({}):",
                         crate::meshes::SUPPORTED
                     ));
-                    let r = ui.text_edit_singleline(&mut path);
+                    let r = ui.text_edit_singleline(&mut path).labelled_by(l.id);
                     go = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
                     ui.horizontal(|ui| {
                         go |= ui.button("Open").clicked();
@@ -143,28 +152,28 @@ impl ViewerApp {
                 self.native.open = Some(path);
             }
         }
-        if let Some(mut path) = self.native.save.take() {
+        if let Some((mut path, export)) = self.native.save.take() {
             let mut keep = true;
             let mut go = false;
-            egui::Window::new("Save JSON")
+            egui::Window::new(export.menu_label())
                 .collapsible(false)
                 .show(ctx, |ui| {
-                    ui.label("Write the volumes (bvseg.volumes/1) to:");
-                    ui.text_edit_singleline(&mut path);
+                    let l = ui.label(export.what());
+                    ui.text_edit_singleline(&mut path).labelled_by(l.id);
                     ui.horizontal(|ui| {
                         go = ui.button("Save").clicked();
                         keep = !ui.button("Close").clicked();
                     });
                 });
             if go {
-                if let Some(res) = self.result() {
-                    match bvseg_io::write_json(path.trim(), res) {
+                if let Some(bytes) = self.export_bytes(export) {
+                    match bvseg_io::write_atomic(path.trim(), &bytes) {
                         Ok(()) => self.message = Some(format!("wrote {}", path.trim())),
                         Err(e) => self.fail(e.to_string()),
                     }
                 }
             } else if keep {
-                self.native.save = Some(path);
+                self.native.save = Some((path, export));
             }
         }
     }
