@@ -252,14 +252,25 @@ impl ViewerApp {
         self.history(ui);
         ui.separator();
         ui.heading("View");
-        ui.checkbox(&mut self.display.colour_by_part, "Colour mesh by part");
-        ui.checkbox(&mut self.display.translucent_mesh, "Translucent mesh");
+        let d = &mut self.display;
+        for (value, label) in [
+            (&mut d.colour_by_part, "Colour mesh by part"),
+            (&mut d.translucent_mesh, "Translucent mesh"),
+        ] {
+            let r = ui.checkbox(value, label);
+            note_widget(label, r.rect);
+        }
         ui.horizontal_wrapped(|ui| {
             ui.label("Volumes:");
             let d = &mut self.display;
-            ui.radio_value(&mut d.volumes, VolumeStyle::Translucent, "Translucent");
-            ui.radio_value(&mut d.volumes, VolumeStyle::Wireframe, "Wireframe");
-            ui.radio_value(&mut d.volumes, VolumeStyle::Hidden, "Hidden");
+            for (style, label) in [
+                (VolumeStyle::Translucent, "Translucent"),
+                (VolumeStyle::Wireframe, "Wireframe"),
+                (VolumeStyle::Hidden, "Hidden"),
+            ] {
+                let r = ui.radio_value(&mut d.volumes, style, label);
+                note_widget(label, r.rect);
+            }
         });
         if ui.button("Reset view").clicked() {
             self.camera.reset();
