@@ -236,6 +236,50 @@ test('clicking the controls in the page runs with them', async () => {
   await page.close();
 });
 
+test('a mesh opened through the file dialog is what runs', async () => {
+  // A box 2 x 1 x 1 as an OBJ file, picked in the browser's file chooser.
+  const dir = mkdtempSync(join(tmpdir(), 'bvseg-open-'));
+  const file = join(dir, 'brick.obj');
+  const v = [0, 1, 2, 3, 4, 5, 6, 7].map((i) => `v ${2 * (i & 1)} ${(i >> 1) & 1} ${(i >> 2) & 1}`);
+  const f = ['1 3 2', '2 3 4', '5 6 7', '6 8 7', '1 2 5', '2 6 5', '3 7 4', '4 7 8', '1 5 3',
+    '3 5 7', '2 4 6', '4 8 6'].map((t) => `f ${t}`);
+  writeFileSync(file, [...v, ...f].join('\n') + '\n');
+  const page = await context.newPage();
+  await page.goto(`${base}/index.html`);
+  await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Mesh'), null, {
+    timeout: 60_000,
+  });
+  const click = async (label) => {
+    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+    assert.equal(r.length, 4, `no widget "${label}"`);
+    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+    await page.waitForTimeout(300);
+  };
+  await click('Mesh');
+  const chooser = page.waitForEvent('filechooser', { timeout: 10_000 });
+  await click('Open file…');
+  await (await chooser).setFiles(file);
+  await page.waitForTimeout(500);
+  await click('Boxes');
+  await click('Fixed k');
+  await click('Run');
+  await page.waitForFunction(
+    () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+    null,
+    { timeout: TIMEOUT_MS, polling: 100 },
+  );
+  assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
+  const r = JSON.parse(await page.locator('#bvseg-result').textContent());
+  assert.equal(r.mesh, 'brick.obj');
+  assert.equal(r.kind, 'obb');
+  assert.equal(r.k, 8);
+  // Boxes around the parts of a box: little outside volume.
+  assert.ok(Number.isFinite(r.tov) && r.tov < 1, `TOV ${r.tov}`);
+  console.log(`# brick.obj, 8 boxes: TOV ${r.tov.toFixed(4)}`);
+  await page.close();
+  rmSync(dir, { recursive: true, force: true });
+});
+
 test('an unknown mesh name ends in "bvseg: error"', async () => {
   const { page, title, text } = await runPage('mesh=no-such-mesh&autorun=1');
   assert.ok(title.startsWith('bvseg: error'), title);

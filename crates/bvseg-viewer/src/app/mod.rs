@@ -380,12 +380,12 @@ impl ViewerApp {
             Progress::Running => {}
             Progress::Done => {
                 self.status = Status::Done;
-                if let (Some(res), Some(r)) = (s.result(), self.reporter.as_mut()) {
-                    let view = self
-                        .view_rect
-                        .map(|v| [v.min.x, v.min.y, v.width(), v.height()]);
-                    let times = [s.wall().as_secs_f64(), s.busy().as_secs_f64()];
-                    let json = summary_json(res, s.params(), times, s.calls(), view);
+                let mesh = self.model.as_ref().map_or("", |m| m.name.as_str());
+                let view = self
+                    .view_rect
+                    .map(|v| [v.min.x, v.min.y, v.width(), v.height()]);
+                if let (Some(json), Some(r)) = (summary_json(mesh, s, view), self.reporter.as_mut())
+                {
                     r(&Report::Done(json));
                 }
             }
@@ -482,18 +482,14 @@ impl eframe::App for ViewerApp {
     }
 }
 
-/// The summary of a finished run as one JSON object: `k`, `tov`, `mov`, `f` (the page
-/// contract), then `samples`, `kind`, `met` (the tolerances were met; `null` with a fixed k),
-/// `time_s` and `core_s` (`times`: the run's wall time, and the part of it spent in the core
-/// rather than drawing), `frames` (frames of the run) and `view` (the 3D view's rectangle in CSS pixels, so that a browser
-/// test knows where to look).
-pub fn summary_json(
-    res: &Segmentation,
-    params: &Params,
-    times: [f64; 2],
-    frames: usize,
-    view: Option<[f32; 4]>,
-) -> String {
+/// The summary of a finished run (`None` before the end) as one JSON object: `k`, `tov`,
+/// `mov`, `f` (the page contract), then `mesh` (its name), `samples`, `kind`, `met` (the
+/// tolerances were met; `null` with a fixed k), `time_s` and `core_s` (the run's wall time, and
+/// the part of it spent in the core rather than drawing), `frames` (frames of the run) and
+/// `view` (the 3D view's rectangle in CSS pixels, so that a browser test knows where to look).
+pub fn summary_json(mesh: &str, s: &Session, view: Option<[f32; 4]>) -> Option<String> {
+    let res = s.result()?;
+    let params = s.params();
     let num = |x: f64| {
         if x.is_finite() {
             format!("{x}")
@@ -509,18 +505,67 @@ pub fn summary_json(
     let view = view.map_or("null".into(), |v| {
         format!("[{},{},{},{}]", v[0], v[1], v[2], v[3])
     });
-    format!(
-        "{{\"k\":{},\"tov\":{},\"mov\":{},\"f\":{},\"samples\":{},\"kind\":\"{}\",\"met\":{},\"time_s\":{},\"core_s\":{},\"frames\":{},\"view\":{}}}",
+    Some(format!(
+        "{{\"k\":{},\"tov\":{},\"mov\":{},\"f\":{},\"mesh\":{},\"samples\":{},\"kind\":\"{}\",\"met\":{},\"time_s\":{},\"core_s\":{},\"frames\":{},\"view\":{}}}",
         m.k,
         num(m.tov),
         num(m.mov),
         num(m.f),
+        json_string(mesh),
         m.samples,
         res.kind.as_str(),
         met,
-        num(times[0]),
-        num(times[1]),
-        frames,
+        num(s.wall().as_secs_f64()),
+        num(s.busy().as_secs_f64()),
+        s.calls(),
         view
-    )
+    ))
+}
+
+/// `text` as a JSON string literal.
+fn json_string(text: &str) -> String {
+    let mut out = String::from("\"");
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::meshes::{load_bundled, BUNDLED};
+    use crate::session::Progress;
+    use web_time::Duration;
+
+    #[test]
+    fn summary_is_json_with_the_page_contract_first() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 2000,
+            k: Some(3),
+            ..Params::default()
+        };
+        let mut s = Session::new(mesh, params);
+        assert!(summary_json("x", &s, None).is_none());
+        while s.advance(Duration::from_secs(1)) == Progress::Running {}
+        let name = "odd \"name\"\\\n.obj";
+        let text = summary_json(name, &s, Some([1.0, 2.0, 3.0, 4.0])).unwrap();
+        assert!(text.starts_with("{\"k\":3,\"tov\":"), "{text}");
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let m = s.result().unwrap().metrics;
+        assert_eq!(v["tov"].as_f64(), Some(m.tov));
+        assert_eq!(v["mov"].as_f64(), Some(m.mov));
+        assert_eq!(v["f"].as_f64(), Some(m.f));
+        assert_eq!(v["mesh"].as_str(), Some(name));
+        assert_eq!(v["met"], serde_json::Value::Null);
+        assert_eq!(v["frames"].as_u64(), Some(s.calls() as u64));
+        assert_eq!(v["view"][3].as_f64(), Some(4.0));
+    }
 }

@@ -11,7 +11,7 @@ use crate::scene::{self, VolumeStyle};
 impl ViewerApp {
     pub(super) fn menu_bar(&mut self, ui: &mut egui::Ui) {
         egui::menu::bar(ui, |ui| {
-            ui.menu_button("Mesh", |ui| {
+            let menu = ui.menu_button("Mesh", |ui| {
                 for m in BUNDLED {
                     if ui.button(m.name).on_hover_text(m.about).clicked() {
                         self.load_bytes(m.file, m.bytes);
@@ -19,11 +19,14 @@ impl ViewerApp {
                     }
                 }
                 ui.separator();
-                if ui.button("Open file…").clicked() {
+                let open = ui.button("Open file…");
+                note_widget("Open file…", open.rect);
+                if open.clicked() {
                     self.open_file(ui.ctx());
                     ui.close_menu();
                 }
             });
+            note_widget("Mesh", menu.response.rect);
             let has_result = self.result().is_some();
             ui.menu_button("Result", |ui| {
                 for export in [Export::Json, Export::Glb] {
