@@ -27,6 +27,6 @@ pub mod session;
 #[cfg(target_arch = "wasm32")]
 mod web;
 
-pub use app::{Settings, StartOptions, Status, ViewerApp};
+pub use app::{Export, Settings, StartMesh, StartOptions, Status, ViewerApp};
 pub use meshes::{load_mesh_bytes, BundledMesh, BUNDLED};
 pub use session::{Session, Snapshot};
