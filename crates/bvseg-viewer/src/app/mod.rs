@@ -1,0 +1,571 @@
+//! The viewer app: controls on the left, the 3D view in the middle, statistics and parts on
+//! the right. Each frame advances the running [`Session`] by a time budget, then draws.
+use std::sync::{Arc, Mutex};
+
+use bvseg_core::{BoundingKind, Mesh, Params, Segmentation};
+use eframe::egui;
+use eframe::glow;
+use web_time::Instant;
+
+use crate::budget::FrameBudget;
+use crate::camera::OrbitCamera;
+use crate::meshes::{self, BUNDLED};
+use crate::platform::{Inbox, Report, Reporter};
+use crate::render::Renderer;
+use crate::scene::{Display, Geometry, MeshGeometry};
+use crate::session::{Progress, Session, Snapshot};
+
+mod panels;
+mod view;
+
+/// The controls of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Bounding-volume kind.
+    pub bounding: BoundingKind,
+    /// Fixed number of parts instead of the tolerance loop.
+    pub fixed_k: bool,
+    /// The fixed k (when `fixed_k`).
+    pub k: usize,
+    /// Tolerance on TOV (sigma_G).
+    pub tov: f64,
+    /// Tolerance on MOV (sigma_L).
+    pub mov: f64,
+    /// Largest k of the tolerance loop.
+    pub max_k: usize,
+    /// Target number of interior samples.
+    pub samples: usize,
+    /// Seed of the initialisation.
+    pub seed: u64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let p = Params::default();
+        Self {
+            bounding: p.bounding,
+            fixed_k: false,
+            k: 8,
+            tov: p.tov,
+            mov: p.mov,
+            max_k: p.max_k,
+            samples: p.samples,
+            seed: p.seed,
+        }
+    }
+}
+
+impl Settings {
+    /// The core's parameters for these settings.
+    pub fn params(&self) -> Params {
+        Params {
+            samples: self.samples,
+            seed: self.seed,
+            bounding: self.bounding,
+            k: self.fixed_k.then_some(self.k),
+            tov: self.tov,
+            mov: self.mov,
+            max_k: self.max_k,
+            ..Params::default()
+        }
+    }
+}
+
+/// Where the app is.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Status {
+    /// No run yet (or the mesh changed).
+    Idle,
+    /// A run is going.
+    Running,
+    /// The last run finished.
+    Done,
+    /// The last run was cancelled.
+    Cancelled,
+    /// Loading or running failed; the message.
+    Failed(String),
+}
+
+/// The mesh the app starts with.
+pub enum StartMesh {
+    /// A bundled mesh, by name.
+    Bundled(String),
+    /// A mesh already loaded (the native command line's argument).
+    Loaded {
+        /// Its name (file name).
+        name: String,
+        /// The mesh.
+        mesh: Mesh,
+    },
+}
+
+/// How the app starts.
+pub struct StartOptions {
+    /// The first mesh.
+    pub mesh: StartMesh,
+    /// Run with the default settings right away.
+    pub autorun: bool,
+    /// Told when a run ends or fails.
+    pub reporter: Option<Reporter>,
+}
+
+impl Default for StartOptions {
+    fn default() -> Self {
+        Self {
+            mesh: StartMesh::Bundled(BUNDLED[0].name.to_string()),
+            autorun: false,
+            reporter: None,
+        }
+    }
+}
+
+/// A loaded mesh with what the view needs of it.
+struct Model {
+    name: String,
+    mesh: Arc<Mesh>,
+    geometry: Arc<MeshGeometry>,
+}
+
+/// What the current scene geometry was built from; rebuilt when this changes.
+#[derive(Debug, Clone, PartialEq)]
+struct SceneKey {
+    model: u64,
+    run: u64,
+    snapshot: Option<usize>,
+    final_colours: bool,
+    selected: Option<usize>,
+    display: Display,
+}
+
+type Gpu = Arc<Mutex<Option<Result<Renderer, String>>>>;
+
+/// The viewer.
+pub struct ViewerApp {
+    settings: Settings,
+    model: Option<Model>,
+    model_id: u64,
+    session: Option<Session>,
+    run_id: u64,
+    status: Status,
+    /// Step shown; `None` follows the latest.
+    history_pos: Option<usize>,
+    selected_part: Option<usize>,
+    display: Display,
+    camera: OrbitCamera,
+    gpu: Gpu,
+    scene: Option<(SceneKey, u64, Arc<Geometry>)>,
+    generation: u64,
+    message: Option<String>,
+    pending_run: bool,
+    reporter: Option<Reporter>,
+    inbox: Inbox,
+    view_rect: Option<egui::Rect>,
+    budget: FrameBudget,
+    #[cfg(not(target_arch = "wasm32"))]
+    native: NativeDialogs,
+}
+
+/// The native "open" and "save" path prompts (a file dialog crate would pull in a GUI
+/// toolkit or D-Bus; a path field is enough, and drag and drop works too).
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(Default)]
+struct NativeDialogs {
+    open: Option<String>,
+    save: Option<(String, Export)>,
+}
+
+/// What the Result menu writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Export {
+    /// The `bvseg.volumes/1` JSON document.
+    Json,
+    /// The mesh and the volumes as binary glTF.
+    Glb,
+}
+
+impl Export {
+    fn extension(self) -> &'static str {
+        match self {
+            Export::Json => "json",
+            Export::Glb => "glb",
+        }
+    }
+
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    fn mime(self) -> &'static str {
+        match self {
+            Export::Json => "application/json",
+            Export::Glb => "model/gltf-binary",
+        }
+    }
+
+    fn menu_label(self) -> &'static str {
+        match (self, cfg!(target_arch = "wasm32")) {
+            (Export::Json, true) => "Download JSON",
+            (Export::Json, false) => "Save JSON…",
+            (Export::Glb, true) => "Download GLB",
+            (Export::Glb, false) => "Save GLB…",
+        }
+    }
+
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
+    fn what(self) -> &'static str {
+        match self {
+            Export::Json => "Write the volumes (bvseg.volumes/1 JSON) to:",
+            Export::Glb => "Write the mesh and the volumes (binary glTF) to:",
+        }
+    }
+}
+
+impl ViewerApp {
+    /// A new app, starting as `start` says.
+    pub fn new(start: StartOptions) -> Self {
+        let mut app = Self {
+            settings: Settings::default(),
+            model: None,
+            model_id: 0,
+            session: None,
+            run_id: 0,
+            status: Status::Idle,
+            history_pos: None,
+            selected_part: None,
+            display: Display::default(),
+            camera: OrbitCamera::framing(1.0),
+            gpu: Arc::new(Mutex::new(None)),
+            scene: None,
+            generation: 0,
+            message: None,
+            pending_run: false,
+            reporter: start.reporter,
+            inbox: Inbox::default(),
+            view_rect: None,
+            budget: FrameBudget::default(),
+            #[cfg(not(target_arch = "wasm32"))]
+            native: NativeDialogs::default(),
+        };
+        match start.mesh {
+            StartMesh::Bundled(name) => match meshes::bundled(&name) {
+                Some(b) => app.load_bytes(b.file, b.bytes),
+                None => {
+                    let names: Vec<&str> = BUNDLED.iter().map(|m| m.name).collect();
+                    app.fail(format!(
+                        "unknown bundled mesh '{name}' (bundled: {})",
+                        names.join(", ")
+                    ));
+                }
+            },
+            StartMesh::Loaded { name, mesh } => app.set_model(name, mesh),
+        }
+        app.pending_run = start.autorun && app.model.is_some();
+        app
+    }
+
+    /// The controls.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The controls, to change them.
+    pub fn settings_mut(&mut self) -> &mut Settings {
+        &mut self.settings
+    }
+
+    /// Where the app is.
+    pub fn status(&self) -> &Status {
+        &self.status
+    }
+
+    /// The current (or last) run.
+    pub fn session(&self) -> Option<&Session> {
+        self.session.as_ref()
+    }
+
+    /// The last run's result.
+    pub fn result(&self) -> Option<&Segmentation> {
+        self.session.as_ref().and_then(Session::result)
+    }
+
+    /// Name of the loaded mesh.
+    pub fn mesh_name(&self) -> Option<&str> {
+        self.model.as_ref().map(|m| m.name.as_str())
+    }
+
+    /// The highlighted part.
+    pub fn selected_part(&self) -> Option<usize> {
+        self.selected_part
+    }
+
+    /// Index of the history step shown.
+    pub fn shown_step(&self) -> Option<usize> {
+        let n = self.session.as_ref()?.snapshots().len();
+        (n > 0).then(|| self.history_pos.unwrap_or(n - 1).min(n - 1))
+    }
+
+    /// The display settings.
+    pub fn display(&self) -> Display {
+        self.display
+    }
+
+    /// The 3D view's rectangle in the last frame, in points.
+    pub fn view_rect(&self) -> Option<egui::Rect> {
+        self.view_rect
+    }
+
+    /// Loads a mesh file's bytes (any way in: menu, dialog, drop), reporting errors in the UI.
+    pub fn load_bytes(&mut self, name: &str, bytes: &[u8]) {
+        match meshes::load_mesh_bytes(bytes, name) {
+            Ok(mesh) => self.set_model(name.to_string(), mesh),
+            Err(e) => self.fail(e),
+        }
+    }
+
+    fn set_model(&mut self, name: String, mesh: Mesh) {
+        let geometry = Arc::new(MeshGeometry::new(&mesh));
+        self.camera = OrbitCamera::framing(geometry.radius);
+        self.model = Some(Model {
+            name,
+            mesh: Arc::new(mesh),
+            geometry,
+        });
+        self.model_id += 1;
+        self.session = None;
+        self.status = Status::Idle;
+        self.history_pos = None;
+        self.selected_part = None;
+        self.message = None;
+    }
+
+    fn fail(&mut self, msg: String) {
+        self.message = Some(msg.clone());
+        self.status = Status::Failed(msg.clone());
+        if let Some(r) = self.reporter.as_mut() {
+            r(&Report::Error(msg));
+        }
+    }
+
+    /// Starts a run of the loaded mesh with the current settings.
+    pub fn run(&mut self) {
+        let Some(model) = &self.model else {
+            return;
+        };
+        self.session = Some(Session::new(model.mesh.clone(), self.settings.params()));
+        self.run_id += 1;
+        self.status = Status::Running;
+        self.history_pos = None;
+        self.selected_part = None;
+        self.message = None;
+    }
+
+    /// Stops the run; what it did so far stays visible.
+    pub fn cancel(&mut self) {
+        if self.status == Status::Running {
+            self.status = Status::Cancelled;
+        }
+    }
+
+    /// Advances the running session by one frame's budget (see [`crate::budget`]).
+    fn advance(&mut self) {
+        let Some(s) = self
+            .session
+            .as_mut()
+            .filter(|_| self.status == Status::Running)
+        else {
+            self.budget.idle();
+            return;
+        };
+        let t0 = Instant::now();
+        let progress = s.advance(self.budget.start(t0));
+        self.budget.worked(t0.elapsed());
+        match progress {
+            Progress::Running => {}
+            Progress::Done => {
+                self.status = Status::Done;
+                let mesh = self.model.as_ref().map_or("", |m| m.name.as_str());
+                let view = self
+                    .view_rect
+                    .map(|v| [v.min.x, v.min.y, v.width(), v.height()]);
+                if let (Some(json), Some(r)) = (summary_json(mesh, s, view), self.reporter.as_mut())
+                {
+                    r(&Report::Done(json));
+                }
+            }
+            Progress::Failed => {
+                let msg = s
+                    .error()
+                    .map_or_else(|| "the run failed".to_string(), |e| e.to_string());
+                self.fail(msg);
+            }
+        }
+    }
+
+    /// One frame of the UI (without eframe, so the tests can drive it).
+    pub fn ui(&mut self, ctx: &egui::Context) {
+        self.take_files(ctx);
+        if std::mem::take(&mut self.pending_run) {
+            self.run();
+        }
+        self.advance();
+        if self.status == Status::Running {
+            ctx.request_repaint();
+        }
+        egui::TopBottomPanel::top("menu").show(ctx, |ui| self.menu_bar(ui));
+        egui::SidePanel::left("controls")
+            .resizable(true)
+            .default_width(250.0)
+            .show(ctx, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+            });
+        egui::SidePanel::right("statistics")
+            .resizable(true)
+            .default_width(250.0)
+            .show(ctx, |ui| self.statistics(ui));
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ctx, |ui| self.view(ui));
+        #[cfg(not(target_arch = "wasm32"))]
+        self.native_dialogs(ctx);
+    }
+
+    fn take_files(&mut self, ctx: &egui::Context) {
+        let mut files = self.inbox.take();
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        for f in dropped {
+            if let Some(bytes) = f.bytes {
+                files.push((f.name, bytes.to_vec()));
+            } else if let Some(path) = f.path {
+                let name = path.file_name().map_or_else(
+                    || path.display().to_string(),
+                    |n| n.to_string_lossy().into(),
+                );
+                match std::fs::read(&path) {
+                    Ok(b) => files.push((name, b)),
+                    Err(e) => self.fail(format!("{}: cannot read: {e}", path.display())),
+                }
+            }
+        }
+        // With several files dropped at once, the last one wins.
+        if let Some((name, bytes)) = files.pop() {
+            self.load_bytes(&name, &bytes);
+        }
+    }
+
+    fn shown_snapshot(&self) -> Option<&Snapshot> {
+        let i = self.shown_step()?;
+        self.session.as_ref()?.snapshots().get(i)
+    }
+
+    /// Whether the shown step is the result's final step (so the parts' figures are final).
+    fn showing_result(&self) -> bool {
+        let (Some(s), Some(i)) = (&self.session, self.shown_step()) else {
+            return false;
+        };
+        s.result().is_some() && i + 1 == s.snapshots().len()
+    }
+
+    /// Frees the GPU objects (the app is closing).
+    pub fn destroy_gpu(&mut self, gl: Option<&glow::Context>) {
+        if let (Some(gl), Ok(mut gpu)) = (gl, self.gpu.lock()) {
+            if let Some(Ok(r)) = gpu.take() {
+                r.destroy(gl);
+            }
+        }
+    }
+}
+
+impl eframe::App for ViewerApp {
+    fn update(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.ui(ctx);
+    }
+
+    fn on_exit(&mut self, gl: Option<&glow::Context>) {
+        self.destroy_gpu(gl);
+    }
+}
+
+/// The summary of a finished run (`None` before the end) as one JSON object: `k`, `tov`,
+/// `mov`, `f` (the page contract), then `mesh` (its name), `samples`, `kind`, `met` (the
+/// tolerances were met; `null` with a fixed k), `time_s` and `core_s` (the run's wall time, and
+/// the part of it spent in the core rather than drawing), `frames` (frames of the run) and
+/// `view` (the 3D view's rectangle in CSS pixels, so that a browser test knows where to look).
+pub fn summary_json(mesh: &str, s: &Session, view: Option<[f32; 4]>) -> Option<String> {
+    let res = s.result()?;
+    let params = s.params();
+    let num = |x: f64| {
+        if x.is_finite() {
+            format!("{x}")
+        } else {
+            "null".into()
+        }
+    };
+    let m = res.metrics;
+    let met = match params.k {
+        Some(_) => "null".to_string(),
+        None => (m.tov < params.tov && m.mov < params.mov).to_string(),
+    };
+    let view = view.map_or("null".into(), |v| {
+        format!("[{},{},{},{}]", v[0], v[1], v[2], v[3])
+    });
+    Some(format!(
+        "{{\"k\":{},\"tov\":{},\"mov\":{},\"f\":{},\"mesh\":{},\"samples\":{},\"kind\":\"{}\",\"met\":{},\"time_s\":{},\"core_s\":{},\"frames\":{},\"view\":{}}}",
+        m.k,
+        num(m.tov),
+        num(m.mov),
+        num(m.f),
+        json_string(mesh),
+        m.samples,
+        res.kind.as_str(),
+        met,
+        num(s.wall().as_secs_f64()),
+        num(s.busy().as_secs_f64()),
+        s.calls(),
+        view
+    ))
+}
+
+/// `text` as a JSON string literal.
+fn json_string(text: &str) -> String {
+    let mut out = String::from("\"");
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::meshes::{load_bundled, BUNDLED};
+    use crate::session::Progress;
+    use web_time::Duration;
+
+    #[test]
+    fn summary_is_json_with_the_page_contract_first() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 2000,
+            k: Some(3),
+            ..Params::default()
+        };
+        let mut s = Session::new(mesh, params);
+        assert!(summary_json("x", &s, None).is_none());
+        while s.advance(Duration::from_secs(1)) == Progress::Running {}
+        let name = "odd \"name\"\\\n.obj";
+        let text = summary_json(name, &s, Some([1.0, 2.0, 3.0, 4.0])).unwrap();
+        assert!(text.starts_with("{\"k\":3,\"tov\":"), "{text}");
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let m = s.result().unwrap().metrics;
+        assert_eq!(v["tov"].as_f64(), Some(m.tov));
+        assert_eq!(v["mov"].as_f64(), Some(m.mov));
+        assert_eq!(v["f"].as_f64(), Some(m.f));
+        assert_eq!(v["mesh"].as_str(), Some(name));
+        assert_eq!(v["met"], serde_json::Value::Null);
+        assert_eq!(v["frames"].as_u64(), Some(s.calls() as u64));
+        assert_eq!(v["view"][3].as_f64(), Some(4.0));
+    }
+}

@@ -1,0 +1,100 @@
+//! The native viewer: `bvseg-viewer [--run] [MESH]`.
+//!
+//! Without `MESH`, the bundled bunny is shown. `--run` starts a run with the default settings
+//! right away and prints its summary (JSON) on stdout when it ends. A mesh that cannot be
+//! read is a one-line error naming the file, with exit status 2, before any window opens.
+
+#[cfg(not(target_arch = "wasm32"))]
+fn main() -> std::process::ExitCode {
+    native::main()
+}
+
+// The browser build enters through the library's `start`.
+#[cfg(target_arch = "wasm32")]
+fn main() {}
+
+#[cfg(not(target_arch = "wasm32"))]
+mod native {
+    use std::path::Path;
+    use std::process::ExitCode;
+
+    use bvseg_viewer::app::{StartMesh, StartOptions, ViewerApp};
+    use bvseg_viewer::platform::Report;
+    use bvseg_viewer::{load_mesh_bytes, meshes};
+
+    const USAGE: &str = "usage: bvseg-viewer [--run] [MESH]\n\n\
+        Shows MESH (a mesh file: .obj), or the bundled bunny, and segments it interactively.\n\
+        --run    start a run with the default settings and print its summary on stdout";
+
+    fn load(path: &str) -> Result<StartMesh, String> {
+        let name = Path::new(path)
+            .file_name()
+            .map_or_else(|| path.to_string(), |n| n.to_string_lossy().into_owned());
+        let bytes = std::fs::read(path).map_err(|e| format!("{path}: cannot read: {e}"))?;
+        // Errors name the path given, not just the file name.
+        let mesh = load_mesh_bytes(&bytes, &name).map_err(|e| e.replacen(&name, path, 1))?;
+        Ok(StartMesh::Loaded { name, mesh })
+    }
+
+    pub fn main() -> ExitCode {
+        let mut autorun = false;
+        let mut mesh = None;
+        for arg in std::env::args().skip(1) {
+            match arg.as_str() {
+                "-h" | "--help" => {
+                    println!("{USAGE}");
+                    return ExitCode::SUCCESS;
+                }
+                "--run" => autorun = true,
+                a if a.starts_with('-') => {
+                    eprintln!("bvseg-viewer: error: unknown option {a} (see --help)");
+                    return ExitCode::from(2);
+                }
+                a if mesh.is_none() => mesh = Some(a.to_string()),
+                a => {
+                    eprintln!("bvseg-viewer: error: unexpected argument {a} (one mesh at most)");
+                    return ExitCode::from(2);
+                }
+            }
+        }
+        let start_mesh = match mesh {
+            Some(p) => match load(&p) {
+                Ok(m) => m,
+                Err(e) => {
+                    eprintln!("bvseg-viewer: error: {e}");
+                    return ExitCode::from(2);
+                }
+            },
+            None => StartMesh::Bundled(meshes::BUNDLED[0].name.to_string()),
+        };
+        let start = StartOptions {
+            mesh: start_mesh,
+            autorun,
+            reporter: Some(Box::new(|r: &Report| match r {
+                Report::Done(json) => println!("{json}"),
+                Report::Error(e) => eprintln!("bvseg-viewer: error: {e}"),
+            })),
+        };
+        let options = eframe::NativeOptions {
+            viewport: eframe::egui::ViewportBuilder::default()
+                .with_title("bvseg viewer")
+                .with_inner_size([1280.0, 800.0])
+                .with_drag_and_drop(true),
+            // The 3D view is depth-tested.
+            depth_buffer: 24,
+            ..Default::default()
+        };
+        let result = eframe::run_native(
+            "bvseg viewer",
+            options,
+            Box::new(move |_cc| Ok(Box::new(ViewerApp::new(start)))),
+        );
+        match result {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("bvseg-viewer: error: cannot open the window: {e}");
+                ExitCode::FAILURE
+            }
+        }
+    }
+}

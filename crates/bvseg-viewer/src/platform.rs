@@ -1,0 +1,144 @@
+//! What differs between the desktop and the browser: how a finished run is reported, how a
+//! file is picked, and how a result leaves the app.
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// What the app tells its host when a run ends.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Report {
+    /// The run finished; the summary as JSON, `{"k":..,"tov":..,"mov":..,"f":..,...}`.
+    Done(String),
+    /// Loading or running failed; a one-line message.
+    Error(String),
+}
+
+/// Receives the app's [`Report`]s (the page writes them into the document; tests collect them).
+pub type Reporter = Box<dyn FnMut(&Report)>;
+
+/// Files picked in a browser file dialog, which arrive asynchronously, for the app to take on
+/// a later frame.
+#[derive(Clone, Default)]
+pub struct Inbox(Rc<RefCell<Vec<NamedBytes>>>);
+
+/// A file's name and content.
+pub type NamedBytes = (String, Vec<u8>);
+
+impl Inbox {
+    /// Adds a file (name, bytes).
+    pub fn push(&self, name: String, bytes: Vec<u8>) {
+        self.0.borrow_mut().push((name, bytes));
+    }
+
+    /// Takes every file that has arrived.
+    pub fn take(&self) -> Vec<NamedBytes> {
+        std::mem::take(&mut *self.0.borrow_mut())
+    }
+}
+
+#[cfg(target_arch = "wasm32")]
+pub use web::{download, pick_file, widget_rect};
+
+/// Remembers where the widget called `label` was drawn in this frame. eframe's web backend has
+/// no accessibility tree, so a browser test finds the widgets it clicks through this record
+/// (natively, AccessKit does that and this does nothing).
+pub fn note_widget(label: &str, rect: eframe::egui::Rect) {
+    #[cfg(target_arch = "wasm32")]
+    web::note_widget(label, rect);
+    #[cfg(not(target_arch = "wasm32"))]
+    let _ = (label, rect);
+}
+
+#[cfg(target_arch = "wasm32")]
+mod web {
+    use eframe::egui;
+    use wasm_bindgen::{JsCast, JsValue};
+
+    use super::Inbox;
+
+    thread_local! {
+        static WIDGETS: std::cell::RefCell<Vec<(String, [f32; 4])>> =
+            const { std::cell::RefCell::new(Vec::new()) };
+    }
+
+    pub fn note_widget(label: &str, r: egui::Rect) {
+        let rect = [r.min.x, r.min.y, r.width(), r.height()];
+        WIDGETS.with(|w| {
+            let mut w = w.borrow_mut();
+            match w.iter_mut().find(|(l, _)| l == label) {
+                Some(entry) => entry.1 = rect,
+                None => w.push((label.to_string(), rect)),
+            }
+        });
+    }
+
+    /// Where the widget called `label` was last drawn: `[x, y, width, height]` in CSS pixels
+    /// of the canvas.
+    pub fn widget_rect(label: &str) -> Option<[f32; 4]> {
+        WIDGETS.with(|w| w.borrow().iter().find(|(l, _)| l == label).map(|e| e.1))
+    }
+
+    fn js_err(e: JsValue) -> String {
+        e.as_string().unwrap_or_else(|| format!("{e:?}"))
+    }
+
+    /// Offers `contents` as a file download named `name`.
+    pub fn download(name: &str, mime: &str, contents: &[u8]) -> Result<(), String> {
+        let window = web_sys::window().ok_or("no window")?;
+        let document = window.document().ok_or("no document")?;
+        let parts = js_sys::Array::new();
+        parts.push(&js_sys::Uint8Array::from(contents));
+        let options = web_sys::BlobPropertyBag::new();
+        options.set_type(mime);
+        let blob = web_sys::Blob::new_with_u8_array_sequence_and_options(&parts, &options)
+            .map_err(js_err)?;
+        let url = web_sys::Url::create_object_url_with_blob(&blob).map_err(js_err)?;
+        let a: web_sys::HtmlAnchorElement = document
+            .create_element("a")
+            .map_err(js_err)?
+            .dyn_into()
+            .map_err(|_| "not an anchor".to_string())?;
+        a.set_href(&url);
+        a.set_download(name);
+        a.click();
+        web_sys::Url::revoke_object_url(&url).map_err(js_err)?;
+        Ok(())
+    }
+
+    /// Opens the browser's file dialog; the chosen file arrives in `inbox`, and `ctx` is asked
+    /// to repaint so the app sees it.
+    pub fn pick_file(inbox: Inbox, ctx: egui::Context, accept: &str) -> Result<(), String> {
+        let document = web_sys::window()
+            .and_then(|w| w.document())
+            .ok_or("no document")?;
+        let input: web_sys::HtmlInputElement = document
+            .create_element("input")
+            .map_err(js_err)?
+            .dyn_into()
+            .map_err(|_| "not an input".to_string())?;
+        input.set_type("file");
+        input.set_accept(accept);
+        let target = input.clone();
+        let on_change = wasm_bindgen::closure::Closure::once(move || {
+            let Some(file) = target.files().and_then(|f| f.get(0)) else {
+                return;
+            };
+            wasm_bindgen_futures::spawn_local(async move {
+                let name = file.name();
+                match wasm_bindgen_futures::JsFuture::from(file.array_buffer()).await {
+                    Ok(buf) => inbox.push(name, js_sys::Uint8Array::new(&buf).to_vec()),
+                    Err(e) => log_error(&format!("{name}: cannot read the file: {}", js_err(e))),
+                }
+                ctx.request_repaint();
+            });
+        });
+        input.set_onchange(Some(on_change.as_ref().unchecked_ref()));
+        // The dialog may never report back (cancel): the closure lives as long as the page.
+        on_change.forget();
+        input.click();
+        Ok(())
+    }
+
+    fn log_error(msg: &str) {
+        web_sys::console::error_1(&msg.into());
+    }
+}

@@ -1,0 +1,340 @@
+//! One segmentation run, advanced a bounded amount at a time.
+//!
+//! The browser has no threads, so the run cannot go off to a worker: [`Session::advance`] does
+//! whole core steps until a time budget is spent and then returns, and the app calls it once
+//! per frame. Cancelling is dropping the session. Every step leaves a [`Snapshot`], so the
+//! history can be stepped back through after (and during) the run.
+use std::sync::Arc;
+
+use bvseg_core::sampling::{Grid, NONE};
+use bvseg_core::{BoundingVolume, Error, Mesh, Params, Segmentation, Segmenter, Step, StepKind};
+use web_time::{Duration, Instant};
+
+/// Part label of a triangle whose part is not known (drawn in the plain mesh colour).
+pub const UNKNOWN_PART: u16 = u16::MAX;
+
+/// Above this many triangles, snapshots keep no per-triangle colouring (only the final state
+/// has it), so that long histories of big meshes stay small in memory.
+pub const MAX_SNAPSHOT_TRIANGLES: usize = 250_000;
+
+/// The state after one refinement step.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    /// The step and its figures.
+    pub step: Step,
+    /// The bounding volumes after the step (for a backtrack, those of the state it returned to).
+    pub volumes: Arc<Vec<BoundingVolume>>,
+    /// Each triangle's part, or [`UNKNOWN_PART`]; empty when not kept.
+    pub triangle_parts: Arc<Vec<u16>>,
+    /// Each part's share of the samples.
+    pub fractions: Arc<Vec<f64>>,
+}
+
+/// Where a run is.
+enum Stage {
+    /// Nothing done yet: the next call samples the solid.
+    Sampling,
+    /// Stepping.
+    Stepping(Box<Segmenter>),
+    /// Finished.
+    Done(Box<Segmentation>),
+    /// The core refused the input.
+    Failed(Error),
+}
+
+/// A run of the core on one mesh with one set of parameters.
+pub struct Session {
+    mesh: Arc<Mesh>,
+    params: Params,
+    stage: Stage,
+    /// For each triangle, a sample next to it, to colour the mesh by the samples' parts.
+    triangle_samples: Vec<u32>,
+    samples: usize,
+    snapshots: Vec<Snapshot>,
+    /// Time spent inside the core so far (not counting the frames in between).
+    busy: Duration,
+    /// Calls of [`Session::advance`] (frames of the run).
+    calls: usize,
+    started: Instant,
+    wall: Option<Duration>,
+}
+
+/// What [`Session::advance`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress {
+    /// More to do.
+    Running,
+    /// The run has just finished or had finished before.
+    Done,
+    /// The run failed (see [`Session::error`]).
+    Failed,
+}
+
+impl Session {
+    /// A run that has not started; [`Session::advance`] does the work.
+    pub fn new(mesh: Arc<Mesh>, params: Params) -> Self {
+        Self {
+            mesh,
+            params,
+            stage: Stage::Sampling,
+            triangle_samples: Vec::new(),
+            samples: 0,
+            snapshots: Vec::new(),
+            busy: Duration::ZERO,
+            calls: 0,
+            started: Instant::now(),
+            wall: None,
+        }
+    }
+
+    /// Do at least one unit of work (sampling, or one core step), and more while `budget` lasts.
+    pub fn advance(&mut self, budget: Duration) -> Progress {
+        let t0 = Instant::now();
+        self.calls += 1;
+        loop {
+            let p = self.advance_one();
+            if p != Progress::Running || t0.elapsed() >= budget {
+                self.busy += t0.elapsed();
+                if p != Progress::Running && self.wall.is_none() {
+                    self.wall = Some(self.started.elapsed());
+                }
+                return p;
+            }
+        }
+    }
+
+    fn advance_one(&mut self) -> Progress {
+        match &mut self.stage {
+            Stage::Sampling => {
+                match Segmenter::new(&self.mesh, &self.params) {
+                    Ok(seg) => {
+                        self.samples = seg.grid().len();
+                        if self.mesh.triangles().len() <= MAX_SNAPSHOT_TRIANGLES {
+                            self.triangle_samples = triangle_samples(&self.mesh, seg.grid());
+                        }
+                        self.stage = Stage::Stepping(Box::new(seg));
+                    }
+                    Err(e) => {
+                        self.stage = Stage::Failed(e);
+                        return Progress::Failed;
+                    }
+                }
+                Progress::Running
+            }
+            Stage::Stepping(seg) => match seg.step() {
+                Some(step) => {
+                    let snap = self.snapshot(step);
+                    self.snapshots.push(snap);
+                    Progress::Running
+                }
+                None => {
+                    let Stage::Stepping(seg) = std::mem::replace(&mut self.stage, Stage::Sampling)
+                    else {
+                        unreachable!("matched above");
+                    };
+                    let result = seg.finish();
+                    if let Some(last) = self.snapshots.last_mut() {
+                        if last.step.kind == StepKind::Final {
+                            // The final colouring: the part whose volume encloses each triangle.
+                            last.triangle_parts = Arc::new(
+                                result
+                                    .triangle_parts
+                                    .iter()
+                                    .map(|&p| u16::try_from(p).unwrap_or(UNKNOWN_PART))
+                                    .collect(),
+                            );
+                        }
+                    }
+                    self.stage = Stage::Done(Box::new(result));
+                    Progress::Done
+                }
+            },
+            Stage::Done(_) => Progress::Done,
+            Stage::Failed(_) => Progress::Failed,
+        }
+    }
+
+    fn snapshot(&self, step: Step) -> Snapshot {
+        let Stage::Stepping(seg) = &self.stage else {
+            unreachable!("snapshots are taken while stepping");
+        };
+        // A backtrack leaves the current state as it was: share the previous snapshot's data.
+        if step.kind == StepKind::Backtrack {
+            if let Some(prev) = self.snapshots.last() {
+                return Snapshot {
+                    step,
+                    ..prev.clone()
+                };
+            }
+        }
+        let labels = seg.labels();
+        let volumes = seg.volumes().to_vec();
+        let mut counts = vec![0usize; volumes.len()];
+        for &l in labels {
+            if let Some(c) = counts.get_mut(l as usize) {
+                *c += 1;
+            }
+        }
+        let n = labels.len().max(1) as f64;
+        let triangle_parts = self
+            .triangle_samples
+            .iter()
+            .map(|&s| match labels.get(s as usize) {
+                Some(&l) => u16::try_from(l).unwrap_or(UNKNOWN_PART),
+                None => UNKNOWN_PART,
+            })
+            .collect();
+        Snapshot {
+            step,
+            volumes: Arc::new(volumes),
+            triangle_parts: Arc::new(triangle_parts),
+            fractions: Arc::new(counts.iter().map(|&c| c as f64 / n).collect()),
+        }
+    }
+
+    /// The mesh being segmented.
+    pub fn mesh(&self) -> &Arc<Mesh> {
+        &self.mesh
+    }
+
+    /// The parameters of the run.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// One snapshot per step so far.
+    pub fn snapshots(&self) -> &[Snapshot] {
+        &self.snapshots
+    }
+
+    /// The result, once done.
+    pub fn result(&self) -> Option<&Segmentation> {
+        match &self.stage {
+            Stage::Done(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The core's error, if the run failed.
+    pub fn error(&self) -> Option<&Error> {
+        match &self.stage {
+            Stage::Failed(e) => Some(e),
+            _ => None,
+        }
+    }
+
+    /// Whether the run is over (done or failed).
+    pub fn is_over(&self) -> bool {
+        matches!(self.stage, Stage::Done(_) | Stage::Failed(_))
+    }
+
+    /// Number of interior samples (0 before sampling).
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// Time spent in the core.
+    pub fn busy(&self) -> Duration {
+        self.busy
+    }
+
+    /// Number of [`Session::advance`] calls so far (the frames of the run).
+    pub fn calls(&self) -> usize {
+        self.calls
+    }
+
+    /// Wall-clock time from the start to the end of the run, or so far.
+    pub fn wall(&self) -> Duration {
+        self.wall.unwrap_or_else(|| self.started.elapsed())
+    }
+}
+
+/// For each triangle, the interior sample nearest to its centroid among the lattice cells
+/// around it ([`NONE`] when there is none within three cells, as for a sliver far from the
+/// solid). Surface triangles touch the solid's boundary cells, so nearly all find one.
+pub fn triangle_samples(mesh: &Mesh, grid: &Grid) -> Vec<u32> {
+    (0..mesh.triangles().len())
+        .map(|t| {
+            let [a, b, c] = mesh.corners(t);
+            let p = (a + b + c) / 3.0;
+            let [ci, cj, ck] = grid.cell_of(p);
+            for r in 1..=3i64 {
+                let mut best = (f64::INFINITY, NONE);
+                for dk in -r..=r {
+                    for dj in -r..=r {
+                        for di in -r..=r {
+                            let s = grid.sample_at(ci + di, cj + dj, ck + dk);
+                            if s != NONE {
+                                let d = grid.points[s as usize].distance_squared(p);
+                                if d < best.0 {
+                                    best = (d, s);
+                                }
+                            }
+                        }
+                    }
+                }
+                if best.1 != NONE {
+                    return best.1;
+                }
+            }
+            NONE
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::meshes::{load_bundled, BUNDLED};
+
+    #[test]
+    fn advance_runs_to_the_end_with_one_snapshot_per_step() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 3000,
+            k: Some(4),
+            ..Params::default()
+        };
+        let mut s = Session::new(mesh.clone(), params.clone());
+        let mut calls = 0;
+        // A zero budget still makes progress: one unit of work per call.
+        while s.advance(Duration::ZERO) == Progress::Running {
+            calls += 1;
+            assert!(calls < 10_000);
+        }
+        let res = s.result().unwrap();
+        assert_eq!(res.metrics.k, 4);
+        assert_eq!(s.snapshots().len(), res.history.len());
+        assert!(calls >= res.history.len());
+        let last = s.snapshots().last().unwrap();
+        assert_eq!(last.step.kind, StepKind::Final);
+        assert_eq!(last.volumes.len(), 4);
+        assert_eq!(last.triangle_parts.len(), mesh.triangles().len());
+        assert!(last.triangle_parts.iter().all(|&p| p < 4));
+        // Stepping gives what the one-call API gives.
+        let direct = bvseg_core::segment(&mesh, &params).unwrap();
+        assert_eq!(direct.metrics, res.metrics);
+    }
+
+    #[test]
+    fn nearly_every_triangle_finds_a_sample() {
+        let mesh = load_bundled(&BUNDLED[1]).unwrap();
+        let grid = Grid::from_mesh(&mesh, 5000).unwrap();
+        let ts = triangle_samples(&mesh, &grid);
+        let missing = ts.iter().filter(|&&s| s == NONE).count();
+        assert!(missing * 100 < ts.len(), "{missing} of {}", ts.len());
+    }
+
+    #[test]
+    fn invalid_parameters_fail_the_run() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 10,
+            ..Params::default()
+        };
+        let mut s = Session::new(mesh, params);
+        assert_eq!(s.advance(Duration::from_secs(1)), Progress::Failed);
+        assert!(s.error().unwrap().to_string().contains("samples"));
+        assert!(s.is_over() && s.result().is_none());
+    }
+}

@@ -1,0 +1,86 @@
+//! The browser entry point and the page contract.
+//!
+//! `index.html?mesh=NAME&autorun=1` loads the bundled mesh `NAME` and runs it with the default
+//! settings. When a run ends, its summary (JSON, see [`crate::app::summary_json`]) is written
+//! into `<pre id="bvseg-result">` and `document.title` starts with `bvseg: done`; on an error
+//! the title is `bvseg: error: <message>`. Scripts wait for the title, and find the controls
+//! to click with [`widget_rect`].
+use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
+
+use crate::app::{StartMesh, StartOptions, ViewerApp};
+use crate::meshes::BUNDLED;
+use crate::platform::Report;
+
+fn set_title(title: &str) {
+    if let Some(d) = web_sys::window().and_then(|w| w.document()) {
+        d.set_title(title);
+    }
+}
+
+fn set_result(text: &str) {
+    if let Some(el) = web_sys::window()
+        .and_then(|w| w.document())
+        .and_then(|d| d.get_element_by_id("bvseg-result"))
+    {
+        el.set_text_content(Some(text));
+    }
+}
+
+fn report(r: &Report) {
+    match r {
+        Report::Done(json) => {
+            set_result(json);
+            set_title("bvseg: done");
+        }
+        Report::Error(msg) => {
+            set_result(msg);
+            set_title(&format!("bvseg: error: {msg}"));
+        }
+    }
+}
+
+/// Where the widget called `label` (such as `Run`, `Boxes`, `Fixed k`) was last drawn, as
+/// `[x, y, width, height]` in CSS pixels of the canvas, for scripts that click it.
+#[wasm_bindgen(js_name = widgetRect)]
+pub fn widget_rect(label: &str) -> Option<Vec<f32>> {
+    crate::platform::widget_rect(label).map(|r| r.to_vec())
+}
+
+/// Starts the viewer in the canvas with id `canvas_id`, reading `mesh` and `autorun` from the
+/// page's query string.
+#[wasm_bindgen]
+pub async fn start(canvas_id: String) -> Result<(), JsValue> {
+    let window = web_sys::window().ok_or("no window")?;
+    let document = window.document().ok_or("no document")?;
+    let canvas: web_sys::HtmlCanvasElement = document
+        .get_element_by_id(&canvas_id)
+        .ok_or_else(|| format!("no element #{canvas_id}"))?
+        .dyn_into()
+        .map_err(|_| format!("#{canvas_id} is not a canvas"))?;
+    let query = web_sys::UrlSearchParams::new_with_str(&window.location().search()?)?;
+    let mesh = query
+        .get("mesh")
+        .unwrap_or_else(|| BUNDLED[0].name.to_string());
+    let autorun = matches!(query.get("autorun").as_deref(), Some("1" | "true" | "yes"));
+    let runner = eframe::WebRunner::new();
+    // After eframe's own panic handler (which logs), make a panic visible to page scripts.
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info.to_string().replace('\n', " ");
+        set_title(&format!("bvseg: error: panic: {msg}"));
+        previous(info);
+    }));
+    let start = StartOptions {
+        mesh: StartMesh::Bundled(mesh),
+        autorun,
+        reporter: Some(Box::new(report)),
+    };
+    runner
+        .start(
+            canvas,
+            eframe::WebOptions::default(),
+            Box::new(move |_cc| Ok(Box::new(ViewerApp::new(start)))),
+        )
+        .await
+}

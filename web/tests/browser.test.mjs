@@ -1,0 +1,288 @@
+// Browser test of the web viewer: headless Chromium (Debian's) driven by playwright-core,
+// against web/dist served on 127.0.0.1 by a tiny static server. Run `web/test.sh`, or after
+// `web/build.sh`: `cd web/tests && npm ci && node --test`.
+//
+// The page contract: ?mesh=NAME&autorun=1 runs the bundled mesh; the end is signalled by the
+// title ("bvseg: done" or "bvseg: error: ...") with the summary JSON in <pre id="bvseg-result">.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { createServer } from 'node:http';
+import { mkdtempSync, readFileSync, rmSync, mkdirSync, writeFileSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, extname, normalize, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { inflateSync } from 'node:zlib';
+import { chromium } from 'playwright-core';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const dist = join(here, '..', 'dist');
+const shots = join(here, 'screenshots');
+const CHROMIUM = process.env.BVSEG_CHROMIUM || '/usr/bin/chromium';
+// The mesh of the timed run: a bundled mesh, segmented with the defaults (20,000 samples).
+const MESH = process.env.BVSEG_TEST_MESH || 'fourleg_2';
+const TIMEOUT_MS = 180_000;
+
+const TYPES = {
+  '.html': 'text/html; charset=utf-8',
+  '.js': 'text/javascript; charset=utf-8',
+  '.wasm': 'application/wasm',
+};
+
+let server;
+let base;
+let context;
+let profile;
+
+before(async () => {
+  assert.ok(existsSync(join(dist, 'index.html')), 'web/dist is missing: run web/build.sh first');
+  server = createServer((req, res) => {
+    const path = normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname));
+    const file = join(dist, path === '/' ? 'index.html' : path);
+    if (!file.startsWith(dist) || !existsSync(file)) {
+      res.writeHead(404).end();
+      return;
+    }
+    res.writeHead(200, { 'content-type': TYPES[extname(file)] || 'application/octet-stream' });
+    res.end(readFileSync(file));
+  });
+  await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
+  base = `http://127.0.0.1:${server.address().port}`;
+  profile = mkdtempSync(join(tmpdir(), 'bvseg-chromium-'));
+  // Playwright adds --headless itself (headless: true); the rest keeps Chromium off the
+  // network and lets WebGL2 run on SwiftShader without a GPU.
+  context = await chromium.launchPersistentContext(profile, {
+    executablePath: CHROMIUM,
+    headless: true,
+    viewport: { width: 1280, height: 800 },
+    deviceScaleFactor: 1,
+    args: [
+      '--no-sandbox',
+      '--disable-gpu',
+      '--disable-background-networking',
+      '--disable-component-update',
+      '--disable-sync',
+      '--no-first-run',
+      '--enable-unsafe-swiftshader',
+    ],
+  });
+});
+
+after(async () => {
+  await context?.close();
+  server?.close();
+  if (profile) rmSync(profile, { recursive: true, force: true });
+});
+
+/** Opens the page with `query` and waits for the end of the run; returns title and JSON text. */
+async function runPage(query) {
+  const page = await context.newPage();
+  const logs = [];
+  page.on('console', (m) => logs.push(`${m.type()}: ${m.text()}`));
+  page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
+  const t0 = Date.now();
+  await page.goto(`${base}/index.html?${query}`);
+  try {
+    await page.waitForFunction(
+      () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+      null,
+      { timeout: TIMEOUT_MS, polling: 100 },
+    );
+  } catch (e) {
+    throw new Error(`no end of run: title "${await page.title()}"\n${logs.join('\n')}`);
+  }
+  const seconds = (Date.now() - t0) / 1000;
+  const title = await page.title();
+  const text = await page.locator('#bvseg-result').textContent();
+  return { page, title, text, seconds, logs };
+}
+
+/** Decodes an 8-bit, non-interlaced RGB or RGBA PNG (what Chromium's screenshots are). */
+function decodePng(buf) {
+  assert.equal(buf.readUInt32BE(0), 0x89504e47, 'not a PNG');
+  let pos = 8;
+  let width, height, channels;
+  const idat = [];
+  while (pos < buf.length) {
+    const len = buf.readUInt32BE(pos);
+    const type = buf.toString('ascii', pos + 4, pos + 8);
+    const data = buf.subarray(pos + 8, pos + 8 + len);
+    if (type === 'IHDR') {
+      width = data.readUInt32BE(0);
+      height = data.readUInt32BE(4);
+      assert.equal(data[8], 8, 'bit depth');
+      assert.equal(data[12], 0, 'interlace');
+      channels = { 2: 3, 6: 4 }[data[9]];
+      assert.ok(channels, `colour type ${data[9]}`);
+    } else if (type === 'IDAT') {
+      idat.push(data);
+    }
+    pos += 12 + len;
+  }
+  const raw = inflateSync(Buffer.concat(idat));
+  const stride = width * channels;
+  const out = Buffer.alloc(width * height * 4);
+  const prev = Buffer.alloc(stride);
+  const cur = Buffer.alloc(stride);
+  for (let y = 0; y < height; y++) {
+    const filter = raw[y * (stride + 1)];
+    const line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+    for (let i = 0; i < stride; i++) {
+      const a = i >= channels ? cur[i - channels] : 0;
+      const b = prev[i];
+      const c = i >= channels ? prev[i - channels] : 0;
+      let v = line[i];
+      if (filter === 1) v += a;
+      else if (filter === 2) v += b;
+      else if (filter === 3) v += (a + b) >> 1;
+      else if (filter === 4) {
+        const p = a + b - c;
+        const pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c);
+        v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      }
+      cur[i] = v & 255;
+    }
+    for (let x = 0; x < width; x++) {
+      out[(y * width + x) * 4] = cur[x * channels];
+      out[(y * width + x) * 4 + 1] = cur[x * channels + 1];
+      out[(y * width + x) * 4 + 2] = cur[x * channels + 2];
+      out[(y * width + x) * 4 + 3] = channels === 4 ? cur[x * channels + 3] : 255;
+    }
+    cur.copy(prev);
+  }
+  return { width, height, data: out };
+}
+
+/** Luminance variance and the share of saturated ("mesh-coloured") pixels in a rectangle. */
+function pixelStats(img, [x0, y0, w, h]) {
+  let n = 0, sum = 0, sum2 = 0, coloured = 0;
+  for (let y = Math.max(0, Math.floor(y0)); y < Math.min(img.height, y0 + h); y++) {
+    for (let x = Math.max(0, Math.floor(x0)); x < Math.min(img.width, x0 + w); x++) {
+      const i = (y * img.width + x) * 4;
+      const [r, g, b] = [img.data[i], img.data[i + 1], img.data[i + 2]];
+      const l = 0.299 * r + 0.587 * g + 0.114 * b;
+      n++;
+      sum += l;
+      sum2 += l * l;
+      // The view's background is a dark blue-grey and egui's widgets are grey: saturated
+      // colours there come from the parts' palette on the mesh and the volumes.
+      if (Math.max(r, g, b) - Math.min(r, g, b) > 40 && l > 50) coloured++;
+    }
+  }
+  const mean = sum / n;
+  return { pixels: n, variance: sum2 / n - mean * mean, coloured: coloured / n };
+}
+
+test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async () => {
+  const { page, title, text, seconds, logs } = await runPage(`mesh=${MESH}&autorun=1`);
+  assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
+  const r = JSON.parse(text);
+  for (const key of ['tov', 'mov', 'f']) {
+    assert.ok(Number.isFinite(r[key]), `${key} = ${r[key]}`);
+  }
+  assert.ok(Number.isInteger(r.k) && r.k >= 2, `k = ${r.k}`);
+  assert.ok(r.tov > 0 && r.f >= 1, text);
+  assert.ok(r.samples > 15000 && r.samples < 25000, `samples = ${r.samples}`);
+  console.log(
+    `# ${MESH}: k=${r.k} TOV=${r.tov.toFixed(4)} MOV=${r.mov.toFixed(4)} F=${r.f.toFixed(4)} ` +
+      `samples=${r.samples}; tolerances (0.3, 0.5) met: ${r.met}; run ${r.time_s.toFixed(2)} s ` +
+      `in the page (budget 3 s; ${r.core_s.toFixed(2)} s of it in the core, the rest drawing ${r.frames} frames), ` +
+      `${seconds.toFixed(2)} s from navigation`,
+  );
+
+  mkdirSync(shots, { recursive: true });
+  const png = await page.screenshot();
+  writeFileSync(join(shots, `${MESH}.png`), png);
+  const img = decodePng(png);
+  assert.ok(Array.isArray(r.view) && r.view[2] > 100 && r.view[3] > 100, `view ${r.view}`);
+  const view = pixelStats(img, r.view);
+  console.log(
+    `# 3D view ${r.view.map(Math.round).join('x')}: luminance variance ${view.variance.toFixed(1)}, ` +
+      `coloured pixels ${(100 * view.coloured).toFixed(1)} %`,
+  );
+  assert.ok(view.variance > 100, `the 3D view looks blank (variance ${view.variance})`);
+  assert.ok(view.coloured > 0.02, `too few mesh-coloured pixels (${view.coloured})`);
+  await page.close();
+});
+
+test('clicking the controls in the page runs with them', async () => {
+  const page = await context.newPage();
+  await page.goto(`${base}/index.html?mesh=bunny`);
+  // eframe's web backend has no accessibility tree: the app tells where it drew a widget.
+  await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Run'), null, {
+    timeout: 60_000,
+  });
+  const click = async (label) => {
+    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+    assert.equal(r.length, 4, `no widget "${label}"`);
+    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+    // Let egui take the click in its next frame.
+    await page.waitForTimeout(300);
+  };
+  await click('Boxes');
+  await click('Fixed k');
+  assert.equal(await page.title(), 'bvseg', 'nothing ran yet');
+  await click('Run');
+  await page.waitForFunction(
+    () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+    null,
+    { timeout: TIMEOUT_MS, polling: 100 },
+  );
+  assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
+  const r = JSON.parse(await page.locator('#bvseg-result').textContent());
+  // The run used what was clicked: boxes, and the fixed k of the controls (8).
+  assert.equal(r.kind, 'obb');
+  assert.equal(r.met, null);
+  assert.equal(r.k, 8);
+  await page.close();
+});
+
+test('a mesh opened through the file dialog is what runs', async () => {
+  // A box 2 x 1 x 1 as an OBJ file, picked in the browser's file chooser.
+  const dir = mkdtempSync(join(tmpdir(), 'bvseg-open-'));
+  const file = join(dir, 'brick.obj');
+  const v = [0, 1, 2, 3, 4, 5, 6, 7].map((i) => `v ${2 * (i & 1)} ${(i >> 1) & 1} ${(i >> 2) & 1}`);
+  const f = ['1 3 2', '2 3 4', '5 6 7', '6 8 7', '1 2 5', '2 6 5', '3 7 4', '4 7 8', '1 5 3',
+    '3 5 7', '2 4 6', '4 8 6'].map((t) => `f ${t}`);
+  writeFileSync(file, [...v, ...f].join('\n') + '\n');
+  const page = await context.newPage();
+  await page.goto(`${base}/index.html`);
+  await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Mesh'), null, {
+    timeout: 60_000,
+  });
+  const click = async (label) => {
+    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+    assert.equal(r.length, 4, `no widget "${label}"`);
+    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+    await page.waitForTimeout(300);
+  };
+  await click('Mesh');
+  const chooser = page.waitForEvent('filechooser', { timeout: 10_000 });
+  await click('Open file…');
+  await (await chooser).setFiles(file);
+  await page.waitForTimeout(500);
+  await click('Boxes');
+  await click('Fixed k');
+  await click('Run');
+  await page.waitForFunction(
+    () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+    null,
+    { timeout: TIMEOUT_MS, polling: 100 },
+  );
+  assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
+  const r = JSON.parse(await page.locator('#bvseg-result').textContent());
+  assert.equal(r.mesh, 'brick.obj');
+  assert.equal(r.kind, 'obb');
+  assert.equal(r.k, 8);
+  // Boxes around the parts of a box: little outside volume.
+  assert.ok(Number.isFinite(r.tov) && r.tov < 1, `TOV ${r.tov}`);
+  console.log(`# brick.obj, 8 boxes: TOV ${r.tov.toFixed(4)}`);
+  await page.close();
+  rmSync(dir, { recursive: true, force: true });
+});
+
+test('an unknown mesh name ends in "bvseg: error"', async () => {
+  const { page, title, text } = await runPage('mesh=no-such-mesh&autorun=1');
+  assert.ok(title.startsWith('bvseg: error'), title);
+  assert.match(text, /no-such-mesh/);
+  await page.close();
+});
