@@ -4,7 +4,7 @@
 //! parent volume is smallest, until one node is left. Nodes carry the convex-hull points of
 //! their parts, so a parent is fitted to few points. Pairs that never touch (a solid made of
 //! several pieces) are merged last, by the same rule.
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
 
@@ -18,7 +18,7 @@ pub fn build(
     hulls: Vec<Vec<DVec3>>,
     volumes: &[BoundingVolume],
     adjacency: &[(u32, u32)],
-    fit: impl Fn(&[DVec3]) -> BoundingVolume,
+    fit: impl Fn(&[DVec3]) -> BoundingVolume + Sync + Send,
 ) -> Vec<HierarchyNode> {
     let k = hulls.len();
     let mut nodes: Vec<HierarchyNode> = volumes
@@ -36,20 +36,8 @@ pub fn build(
         .iter()
         .map(|&(a, b)| (a as usize, b as usize))
         .collect();
-    // Cache of candidate parents: (a, b) -> (volume, fitted volume, points).
-    let mut cache: std::collections::BTreeMap<(usize, usize), (BoundingVolume, Vec<DVec3>)> =
-        std::collections::BTreeMap::new();
-    let mut parent = |a: usize, b: usize, points: &[Vec<DVec3>]| {
-        cache
-            .entry((a, b))
-            .or_insert_with(|| {
-                let mut p = points[a].clone();
-                p.extend_from_slice(&points[b]);
-                let hull = hull_points(&p);
-                (fit(&hull), hull)
-            })
-            .clone()
-    };
+    // Candidate parents by pair: (fitted volume, hull points).
+    let mut cache: BTreeMap<(usize, usize), (BoundingVolume, Vec<DVec3>)> = BTreeMap::new();
     while alive.len() > 1 {
         let mut pairs: Vec<(usize, usize)> = touching
             .iter()
@@ -64,15 +52,30 @@ pub fn build(
                 .flat_map(|(i, &x)| a[i + 1..].iter().map(move |&y| (x, y)))
                 .collect();
         }
-        let mut best: Option<(f64, usize, usize, BoundingVolume, Vec<DVec3>)> = None;
+        // Fit the new candidates in parallel; the choice below runs in pair order.
+        let missing: Vec<(usize, usize)> = pairs
+            .iter()
+            .copied()
+            .filter(|p| !cache.contains_key(p))
+            .collect();
+        let fitted = crate::parallel::map(&missing, |&(a, b)| {
+            let mut p = points[a].clone();
+            p.extend_from_slice(&points[b]);
+            let hull = hull_points(&p);
+            (fit(&hull), hull)
+        });
+        cache.extend(missing.into_iter().zip(fitted));
+        let mut best: Option<(f64, usize, usize)> = None;
         for (a, b) in pairs {
-            let (v, hull) = parent(a, b, &points);
-            let vol = v.volume();
-            if best.as_ref().is_none_or(|x| vol < x.0) {
-                best = Some((vol, a, b, v, hull));
+            let vol = cache[&(a, b)].0.volume();
+            if best.is_none_or(|x| vol < x.0) {
+                best = Some((vol, a, b));
             }
         }
-        let Some((_, a, b, v, hull)) = best else {
+        let Some((_, a, b)) = best else {
+            break;
+        };
+        let Some((v, hull)) = cache.remove(&(a, b)) else {
             break;
         };
         let id = nodes.len();
