@@ -238,7 +238,15 @@ fn min_part(solid: &Solid, part: &Partition) -> usize {
 }
 
 /// Fit both changed parts of every move that the cache lacks (in parallel).
-fn fit_moves(mesh: &Mesh, solid: &Solid, fitter: &mut Fitter, part: &Partition, moves: &[Move]) {
+/// `current[i]` is the fit of part `i` as it is.
+fn fit_moves(
+    mesh: &Mesh,
+    solid: &Solid,
+    fitter: &mut Fitter,
+    part: &Partition,
+    moves: &[Move],
+    current: &[Arc<Fit>],
+) {
     // (move, side) for each part not fitted yet: `false` the giving part, `true` the receiving.
     let todo: Vec<(usize, bool)> = moves
         .iter()
@@ -256,12 +264,13 @@ fn fit_moves(mesh: &Mesh, solid: &Solid, fitter: &mut Fitter, part: &Partition, 
         let in_layer = |s: usize| mv.layer.binary_search(&(s as u32)).is_ok();
         let label_of = |s: usize| if in_layer(s) { mv.to } else { part.labels[s] };
         if receiving {
-            let mut mem = members[mv.to as usize].clone();
-            mem.extend_from_slice(&mv.layer);
-            (
-                mv.m_to,
-                enclosure.points_with(mesh, solid, label_of, &mem, mv.to),
-            )
+            // The receiving part only grows: its old points all lie in its new hull (its
+            // samples stay, and the faces it shared with the layer are now between two of
+            // its samples), so its old hull and the layer's points have the same hull as
+            // all its new points, at a fraction of the cost.
+            let mut pts = current[mv.to as usize].hull.clone();
+            pts.extend(enclosure.points_with(mesh, solid, label_of, &mv.layer, mv.to));
+            (mv.m_to, pts)
         } else {
             let mem: Vec<u32> = members[mv.from as usize]
                 .iter()
@@ -336,7 +345,7 @@ pub fn tighten(
             }
             cands.extend(layer_move(solid, part, pair, layer, min_part));
         }
-        fit_moves(mesh, solid, fitter, part, &cands);
+        fit_moves(mesh, solid, fitter, part, &cands, &fits);
         // Gains against the current state.
         let ov = |f: &Fit, n: f64| f.outside.len() as f64 / n.max(1.0);
         let mut scored: Vec<(i64, usize)> = Vec::new();
@@ -447,7 +456,7 @@ pub fn relieve_worst(
             .into_iter()
             .filter_map(|(pair, layer)| layer_move(solid, part, pair, layer, min_part))
             .collect();
-        fit_moves(mesh, solid, fitter, part, &cands);
+        fit_moves(mesh, solid, fitter, part, &cands, &fits);
         let mut best: Option<(f64, usize)> = None;
         for (i, mv) in cands.iter().enumerate() {
             let (a, b) = (mv.from as usize, mv.to as usize);
