@@ -179,7 +179,7 @@ impl Enclosure {
             }
         }
         sort_dedup(&mut verts, mesh.vertices().len());
-        let lat = corners_of_z_slices(extreme_on_lines(&lat));
+        let lat = extreme_on_lines(&lat);
         let mut pts = Vec::with_capacity(lat.len() + verts.len());
         pts.extend(
             lat.iter()
@@ -277,79 +277,6 @@ fn extreme_on_lines(lat: &[[i64; 3]]) -> Vec<[i64; 3]> {
         }
     }
     out
-}
-
-/// The points of `pts` (distinct, sorted by `(x, y, z)`) that are corners of the convex
-/// polygon of their z slice (the points of the set with the same z), in the same order. Any
-/// other point is in the convex hull of others of its slice, so it cannot be a vertex of the
-/// set's convex hull. Integer cross products make the test exact.
-fn corners_of_z_slices(pts: Vec<[i64; 3]>) -> Vec<[i64; 3]> {
-    let Some((z0, z1)) = pts
-        .iter()
-        .map(|p| (p[2], p[2]))
-        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
-    else {
-        return pts;
-    };
-    let nz = (z1 - z0 + 1) as usize;
-    if nz > 4 * pts.len() + 64 {
-        return pts;
-    }
-    // Bucket by z (stable, so each slice stays sorted by (x, y)).
-    let mut start = vec![0usize; nz + 1];
-    for p in &pts {
-        start[(p[2] - z0) as usize + 1] += 1;
-    }
-    for i in 0..nz {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut order = vec![0u32; pts.len()];
-    for (i, p) in pts.iter().enumerate() {
-        let b = (p[2] - z0) as usize;
-        order[fill[b]] = i as u32;
-        fill[b] += 1;
-    }
-    let mut keep = vec![false; pts.len()];
-    let mut chain: Vec<u32> = Vec::new();
-    // Whether `b` is a strict left turn from `o -> a` (collinear points are not corners).
-    let left = |o: u32, a: u32, b: u32| {
-        let (o, a, b) = (pts[o as usize], pts[a as usize], pts[b as usize]);
-        (a[0] - o[0]) as i128 * (b[1] - o[1]) as i128
-            - (a[1] - o[1]) as i128 * (b[0] - o[0]) as i128
-            > 0
-    };
-    for z in 0..nz {
-        let slice = &order[start[z]..start[z + 1]];
-        if slice.len() <= 2 {
-            for &i in slice {
-                keep[i as usize] = true;
-            }
-            continue;
-        }
-        // Andrew's monotone chain, lower then upper part.
-        for pass in [false, true] {
-            chain.clear();
-            let mut push = |i: u32| {
-                while chain.len() >= 2 && !left(chain[chain.len() - 2], chain[chain.len() - 1], i) {
-                    chain.pop();
-                }
-                chain.push(i);
-            };
-            if pass {
-                slice.iter().rev().for_each(|&i| push(i));
-            } else {
-                slice.iter().for_each(|&i| push(i));
-            }
-            for &i in &chain {
-                keep[i as usize] = true;
-            }
-        }
-    }
-    pts.into_iter()
-        .zip(keep)
-        .filter_map(|(p, k)| k.then_some(p))
-        .collect()
 }
 
 /// The lattice points that are the first or last of the set on their lattice line along z,
@@ -490,10 +417,7 @@ mod tests {
             }
             let to_world = |c: &[i64; 3]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * 0.3;
             let all: Vec<DVec3> = set.iter().map(to_world).collect();
-            let kept: Vec<DVec3> = corners_of_z_slices(extreme_on_lines(&set))
-                .iter()
-                .map(to_world)
-                .collect();
+            let kept: Vec<DVec3> = extreme_on_lines(&set).iter().map(to_world).collect();
             assert!(kept.len() < all.len());
             let h = convex_hull(&kept);
             let full = convex_hull(&all);
@@ -505,40 +429,6 @@ mod tests {
                         assert!(nrm.dot(*p - v0) <= 1e-9, "outside by {}", nrm.dot(*p - v0));
                     }
                 }
-            }
-        }
-    }
-
-    /// Slice corners: a subset in the same order, and every dropped point is in the convex
-    /// polygon of the kept points of its slice.
-    #[test]
-    fn z_slice_corners() {
-        let mut rng = Rng::new(31);
-        for (n, side) in [(3, 3), (100, 5), (1500, 10)] {
-            let mut set = random_set(&mut rng, n, side);
-            set.sort_unstable();
-            set.dedup();
-            let kept = corners_of_z_slices(set.clone());
-            assert!(kept.windows(2).all(|w| w[0] < w[1]));
-            for p in &set {
-                if kept.contains(p) {
-                    continue;
-                }
-                // Inside or on the polygon: on no edge's strict outer side, for a polygon of
-                // the slice's kept points (checked against every pair, a superset of edges).
-                let sl: Vec<&[i64; 3]> = kept.iter().filter(|q| q[2] == p[2]).collect();
-                assert!(sl.len() >= 2);
-                let inside = sl.iter().all(|a| {
-                    sl.iter().all(|b| {
-                        let cr = |q: &[i64; 3]| {
-                            (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0])
-                        };
-                        // Edge a -> b of the hull: every kept point on one side; p must be too.
-                        let all_left = sl.iter().all(|q| cr(q) >= 0);
-                        !all_left || cr(p) >= 0
-                    })
-                });
-                assert!(inside, "{p:?}");
             }
         }
     }
