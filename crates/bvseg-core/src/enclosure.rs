@@ -123,7 +123,8 @@ impl Enclosure {
         self.points_with(mesh, solid, |s| labels[s], members, label)
     }
 
-    /// Like [`Enclosure::points`], with the labelling given as a function.
+    /// Like [`Enclosure::points`], with the labelling given as a function. `members` must be
+    /// exactly the samples that `label_of` maps to `label`.
     pub fn points_with(
         &self,
         mesh: &Mesh,
@@ -138,6 +139,20 @@ impl Enclosure {
         let mut lat: Vec<[i64; 3]> = Vec::new();
         // Triangles share corners: bound each distinct vertex once (the hull is the cost).
         let mut verts: Vec<u32> = Vec::new();
+        // Membership as a bitmap over the members' index range: `label_of` may be costly
+        // (a search in a move's layer), and each member asks about six neighbours.
+        let first = members.iter().copied().min().unwrap_or(0) as usize;
+        let last = members.iter().copied().max().unwrap_or(0) as usize;
+        debug_assert!(members.iter().all(|&s| label_of(s as usize) == label));
+        let mut bits = vec![0u64; (last - first) / 64 + 1];
+        for &s in members {
+            let i = s as usize - first;
+            bits[i / 64] |= 1 << (i % 64);
+        }
+        let member = |t: usize| {
+            let i = t.wrapping_sub(first);
+            i <= last - first && bits[i / 64] & (1 << (i % 64)) != 0
+        };
         for &s in members {
             let s = s as usize;
             let c = g.coords[s].map(|x| 2 * x as i64);
@@ -145,7 +160,8 @@ impl Enclosure {
             for &t in &g.neighbors[s] {
                 if t == NONE {
                     interior = false;
-                } else if label_of(t as usize) != label {
+                } else if !member(t as usize) {
+                    debug_assert_ne!(label_of(t as usize), label);
                     interior = false;
                     let d = g.coords[t as usize];
                     lat.push([
@@ -162,21 +178,109 @@ impl Enclosure {
                 verts.extend_from_slice(&mesh.triangles()[t as usize]);
             }
         }
-        verts.sort_unstable();
-        verts.dedup();
-        let mut pts: Vec<DVec3> = extreme_on_z_lines(&lat)
-            .into_iter()
-            .map(|c| g.origin + 0.5 * g.h * DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
-            .collect();
+        sort_dedup(&mut verts, mesh.vertices().len());
+        let lat = extreme_on_lines(&lat);
+        let mut pts = Vec::with_capacity(lat.len() + verts.len());
+        pts.extend(
+            lat.iter()
+                .map(|c| g.origin + 0.5 * g.h * DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)),
+        );
         pts.extend(verts.iter().map(|&v| mesh.vertices()[v as usize]));
         pts
     }
 }
 
-/// The lattice points that are the first or last of the set on their lattice line along z.
-/// Any other point lies strictly between two points of the set, so it cannot be a vertex of
-/// their convex hull: a cheap, exact prefilter for the hull. (Filtering along x and y too
-/// removes a few more points but costs more than the hull saves.)
+/// Sorts `v` and removes duplicates, for values below `n`: by a bitmap of `0..n` when that is
+/// small against `v` (the usual case: a part's triangle corners among the mesh's vertices),
+/// by sorting otherwise.
+fn sort_dedup(v: &mut Vec<u32>, n: usize) {
+    let words = n.div_ceil(64);
+    if words > 2 * v.len() + 64 {
+        v.sort_unstable();
+        v.dedup();
+        return;
+    }
+    let mut bits = vec![0u64; words];
+    for &x in v.iter() {
+        bits[x as usize / 64] |= 1 << (x % 64);
+    }
+    v.clear();
+    for (w, &b) in bits.iter().enumerate() {
+        let mut b = b;
+        while b != 0 {
+            v.push((w * 64) as u32 + b.trailing_zeros());
+            b &= b - 1;
+        }
+    }
+}
+
+/// The distinct lattice points of `lat` that are the first or last of the set on each of
+/// their three lattice lines (along x, y and z), in increasing `(x, y, z)` order. Any other
+/// point lies strictly between two points of the set, so it cannot be a vertex of their
+/// convex hull: a cheap, exact prefilter for the hull.
+///
+/// The first and last point of every line are found in dense tables over the points'
+/// bounding box; a set too sparse in its box for those tables falls back to sorting, and
+/// filters along z only.
+fn extreme_on_lines(lat: &[[i64; 3]]) -> Vec<[i64; 3]> {
+    let Some(&first) = lat.first() else {
+        return Vec::new();
+    };
+    let (mut lo, mut hi) = (first, first);
+    for p in lat {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let w = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1) as usize);
+    let cells = w[0] * w[1] + w[1] * w[2] + w[0] * w[2];
+    if cells > 16 * lat.len() + 4096 {
+        return extreme_on_z_lines(lat);
+    }
+    // Per line, the least and greatest coordinate along it, relative to `lo`.
+    const EMPTY: [u32; 2] = [u32::MAX, 0];
+    let mut zl = vec![EMPTY; w[0] * w[1]];
+    let mut xl = vec![EMPTY; w[1] * w[2]];
+    let mut yl = vec![EMPTY; w[0] * w[2]];
+    let rel = |p: &[i64; 3]| [0, 1, 2].map(|a| (p[a] - lo[a]) as u32);
+    let widen = |e: &mut [u32; 2], v: u32| {
+        e[0] = e[0].min(v);
+        e[1] = e[1].max(v);
+    };
+    for p in lat {
+        let [x, y, z] = rel(p);
+        let (x, y, z) = (x as usize, y as usize, z as usize);
+        widen(&mut zl[x * w[1] + y], z as u32);
+        widen(&mut xl[y * w[2] + z], x as u32);
+        widen(&mut yl[x * w[2] + z], y as u32);
+    }
+    // Every kept point is the first or last on its z line: walking the z lines in (x, y)
+    // order yields them sorted and once each.
+    let mut out = Vec::new();
+    for x in 0..w[0] {
+        for y in 0..w[1] {
+            let [z0, z1] = zl[x * w[1] + y];
+            if z0 > z1 {
+                continue;
+            }
+            let ends = [z0, z1];
+            for &z in &ends[..if z0 == z1 { 1 } else { 2 }] {
+                let ex = xl[y * w[2] + z as usize];
+                let ey = yl[x * w[2] + z as usize];
+                if (ex[0] == x as u32 || ex[1] == x as u32)
+                    && (ey[0] == y as u32 || ey[1] == y as u32)
+                {
+                    out.push([x as i64 + lo[0], y as i64 + lo[1], z as i64 + lo[2]]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The lattice points that are the first or last of the set on their lattice line along z,
+/// sorted and deduplicated (the sparse case of [`extreme_on_lines`]).
 fn extreme_on_z_lines(lat: &[[i64; 3]]) -> Vec<[i64; 3]> {
     let mut pts = lat.to_vec();
     // Sorted by (x, y, z): each z line is a run of equal (x, y).
@@ -247,4 +351,101 @@ fn nearest_samples(mesh: &Mesh, solid: &Solid) -> Vec<u32> {
             best.1
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bounding::hull::convex_hull;
+    use crate::rng::Rng;
+
+    /// Random lattice sets: a blob in a box (dense, the table path) or scattered points in a
+    /// wide box (sparse, the sorting path).
+    fn random_set(rng: &mut Rng, n: usize, side: i64) -> Vec<[i64; 3]> {
+        let mut v: Vec<[i64; 3]> = (0..n)
+            .map(|_| [0; 3].map(|_| (rng.next_f64() * side as f64) as i64 - side / 3))
+            .collect();
+        // Duplicates, as the enclosure may produce.
+        let dup: Vec<[i64; 3]> = v.iter().step_by(7).copied().collect();
+        v.extend(dup);
+        v
+    }
+
+    fn is_between(p: &[i64; 3], set: &[[i64; 3]], axes: &[usize]) -> bool {
+        axes.iter().any(|&a| {
+            let on_line = |q: &&[i64; 3]| (0..3).all(|b| b == a || q[b] == p[b]);
+            let below = set.iter().filter(on_line).any(|q| q[a] < p[a]);
+            let above = set.iter().filter(on_line).any(|q| q[a] > p[a]);
+            below && above
+        })
+    }
+
+    #[test]
+    fn extreme_on_lines_keeps_exactly_the_line_extremes() {
+        let mut rng = Rng::new(23);
+        for (n, side) in [(1, 3), (40, 4), (400, 8), (2000, 12), (300, 400)] {
+            let set = random_set(&mut rng, n, side);
+            let out = extreme_on_lines(&set);
+            assert!(out.windows(2).all(|w| w[0] < w[1]), "sorted, no duplicates");
+            assert!(out.iter().all(|p| set.contains(p)));
+            let dense = side < 100;
+            let axes: &[usize] = if dense { &[0, 1, 2] } else { &[2] };
+            for p in &set {
+                assert_eq!(out.contains(p), !is_between(p, &set, axes), "{p:?}");
+            }
+        }
+        assert!(extreme_on_lines(&[]).is_empty());
+    }
+
+    /// The hull of the filtered points is the hull of all of them: every point is inside it
+    /// (up to round-off), and its vertices are input points.
+    #[test]
+    fn filtered_hull_is_the_full_hull() {
+        let mut rng = Rng::new(5);
+        for (n, side) in [(50, 5), (600, 10), (3000, 16), (200, 300)] {
+            let mut set = random_set(&mut rng, n, side);
+            // A lattice ball too: many coplanar and collinear ties.
+            let r = (side / 2).min(6);
+            for x in -r..=r {
+                for y in -r..=r {
+                    for z in -r..=r {
+                        if x * x + y * y + z * z <= r * r {
+                            set.push([x + 2 * side, y, z]);
+                        }
+                    }
+                }
+            }
+            let to_world = |c: &[i64; 3]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * 0.3;
+            let all: Vec<DVec3> = set.iter().map(to_world).collect();
+            let kept: Vec<DVec3> = extreme_on_lines(&set).iter().map(to_world).collect();
+            assert!(kept.len() < all.len());
+            let h = convex_hull(&kept);
+            let full = convex_hull(&all);
+            for (a, b) in [(&h, &all), (&full, &kept)] {
+                for f in 0..a.faces.len() {
+                    let (nrm, _) = a.face_normal_area(f);
+                    let v0 = a.vertices[a.faces[f][0] as usize];
+                    for p in b.iter() {
+                        assert!(nrm.dot(*p - v0) <= 1e-9, "outside by {}", nrm.dot(*p - v0));
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sort_dedup_both_ways() {
+        let mut rng = Rng::new(9);
+        for (len, n) in [(0, 10), (50, 100), (50, 1_000_000), (3000, 5000)] {
+            let v: Vec<u32> = (0..len)
+                .map(|_| (rng.next_f64() * n as f64) as u32)
+                .collect();
+            let mut want = v.clone();
+            want.sort_unstable();
+            want.dedup();
+            let mut got = v;
+            sort_dedup(&mut got, n);
+            assert_eq!(got, want);
+        }
+    }
 }

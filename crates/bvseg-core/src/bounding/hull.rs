@@ -191,7 +191,10 @@ struct Face {
     na: DVec3,
     /// `eps * |n|`: the threshold on `n . (p - v0)` for a point to count as outside.
     thr: f64,
-    conflict: Vec<u32>,
+    /// First and last point of the conflict list (linked through [`QuickHull::next`]), or
+    /// [`NONE`].
+    head: u32,
+    tail: u32,
     /// The conflict point farthest outside and its `n . (p - v0)`.
     far: u32,
     far_d: f64,
@@ -208,8 +211,9 @@ struct QuickHull<'a> {
     stamp: u32,
     /// Scratch for [`QuickHull::assign`].
     planes: Vec<(DVec3, DVec3, DVec3, f64)>,
-    /// Emptied conflict lists of deleted faces, for reuse.
-    pool: Vec<Vec<u32>>,
+    /// Per point, the next point of the conflict list it is on: one flat array instead of a
+    /// growing vector per face, as each point is on at most one list.
+    next: Vec<u32>,
     /// Per point, the stamp of the last apex whose horizon it was found on.
     seen: Vec<u32>,
 }
@@ -219,10 +223,12 @@ impl<'a> QuickHull<'a> {
         Self {
             q,
             eps,
-            faces: Vec::with_capacity(q.len() + 64),
+            // Transient faces (later buried) come to a few times the points on lattice inputs;
+            // growing this vector of large faces costs more than the spare capacity.
+            faces: Vec::with_capacity(4 * q.len() + 64),
             stamp: 0,
             planes: Vec::new(),
-            pool: Vec::new(),
+            next: vec![NONE; q.len()],
             seen: vec![0; q.len()],
         }
     }
@@ -242,7 +248,8 @@ impl<'a> QuickHull<'a> {
             n,
             na,
             thr: self.eps * n.length(),
-            conflict: self.pool.pop().unwrap_or_default(),
+            head: NONE,
+            tail: NONE,
             far: NONE,
             far_d: 0.0,
             mark: 0,
@@ -467,7 +474,7 @@ impl<'a> QuickHull<'a> {
             .iter()
             .rev()
             .copied()
-            .filter(|&f| !self.faces[f as usize].conflict.is_empty())
+            .filter(|&f| self.faces[f as usize].head != NONE)
             .collect();
         self.expand(todo)
     }
@@ -480,15 +487,15 @@ impl<'a> QuickHull<'a> {
         for f in todo0 {
             todo.push(self.key(f));
         }
-        let mut visible: Vec<u32> = Vec::new();
+        let mut visible: Vec<u32> = Vec::with_capacity(64);
         // Horizon edges `(u, v, face outside)`.
-        let mut horizon: Vec<(u32, u32, u32)> = Vec::new();
-        let mut stack: Vec<(u32, usize, usize, usize)> = Vec::new();
-        let mut orphans: Vec<u32> = Vec::new();
-        let mut new_faces: Vec<u32> = Vec::new();
+        let mut horizon: Vec<(u32, u32, u32)> = Vec::with_capacity(64);
+        let mut stack: Vec<(u32, usize, usize, usize)> = Vec::with_capacity(64);
+        let mut orphans: Vec<u32> = Vec::with_capacity(self.q.len());
+        let mut new_faces: Vec<u32> = Vec::with_capacity(64);
         while let Some((_, f0)) = todo.pop() {
             let face = &self.faces[f0 as usize];
-            if !face.alive || face.conflict.is_empty() {
+            if !face.alive || face.head == NONE {
                 continue;
             }
             let apex = face.far;
@@ -565,14 +572,19 @@ impl<'a> QuickHull<'a> {
             for &g in visible.iter() {
                 let face = &mut self.faces[g as usize];
                 face.alive = false;
-                orphans.extend(face.conflict.drain(..).filter(|&p| p != apex));
-                let list = std::mem::take(&mut face.conflict);
-                self.pool.push(list);
+                let mut p = std::mem::replace(&mut face.head, NONE);
+                face.tail = NONE;
+                while p != NONE {
+                    if p != apex {
+                        orphans.push(p);
+                    }
+                    p = self.next[p as usize];
+                }
             }
             let nf = std::mem::take(&mut new_faces);
             self.assign(&orphans, &nf);
             for &x in &nf {
-                if !self.faces[x as usize].conflict.is_empty() {
+                if self.faces[x as usize].head != NONE {
                     todo.push(self.key(x));
                 }
             }
@@ -600,7 +612,12 @@ impl<'a> QuickHull<'a> {
             false
         };
         let face = &mut self.faces[f as usize];
-        face.conflict.push(p);
+        self.next[p as usize] = NONE;
+        match face.tail {
+            NONE => face.head = p,
+            t => self.next[t as usize] = p,
+        }
+        face.tail = p;
         if better {
             face.far_d = h;
             face.far = p;

@@ -577,12 +577,8 @@ fn barrier<const N: usize, const K: usize>(
     let smax = q.iter().map(|x| quad(&w0, x)).fold(0.0f64, f64::max);
     let mut h = pairs.map(|(a, b)| w0[a][b] / (smax * 1.05));
     // d/dh and d2/dh2 of -log det H: -tr(W E_p) and tr(W E_p W E_q), with E_p the
-    // symmetric unit matrix of pair p, that is sum over its (x, y) terms of W_yx and of
-    // W_wx W_yz.
-    let terms = |p: usize| {
-        let (a, b) = pairs[p];
-        ([(a, b), (b, a)], if a == b { 1 } else { 2 })
-    };
+    // symmetric unit matrix of pair p = (a, b) (ones at (a, b) and (b, a)): with W symmetric,
+    // f_p W_ab and f_p f_q (W_ad W_bc + W_ac W_bd) / 2 for q = (c, d), f the pair factors.
     let mut m = q.len() as f64;
     // Input index of each point still in the problem.
     let mut act: Vec<usize> = (0..q.len()).collect();
@@ -616,17 +612,12 @@ fn barrier<const N: usize, const K: usize>(
                 }
             }
             for p in 0..K {
-                let (tp, np) = terms(p);
-                g[p] -= t * tp[..np].iter().map(|&(x, y)| wm[y][x]).sum::<f64>();
+                let (a, b) = pairs[p];
+                g[p] -= t * pair_f[p] * wm[a][b];
                 for qq in 0..=p {
-                    let (tq, nq) = terms(qq);
-                    let mut v = 0.0;
-                    for &(x, y) in &tp[..np] {
-                        for &(z, w) in &tq[..nq] {
-                            v += wm[w][x] * wm[y][z];
-                        }
-                    }
-                    hess[p][qq] += t * v;
+                    let (c, e) = pairs[qq];
+                    let v = wm[a][e] * wm[b][c] + wm[a][c] * wm[b][e];
+                    hess[p][qq] += 0.5 * t * pair_f[p] * pair_f[qq] * v;
                 }
             }
             let step = cholesky_solve(&mut hess, &g)?;
@@ -884,18 +875,22 @@ fn core_set<const N: usize>(q: &[[f64; N]]) -> Vec<usize> {
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    // Two accumulators, so the sum vectorises.
-    let (mut s0, mut s1) = (0.0, 0.0);
-    let mut ca = a.chunks_exact(2);
-    let mut cb = b.chunks_exact(2);
+    // Four independent accumulators, so that the sum vectorises into packed operations.
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0; 4];
+    let mut ca = a.chunks_exact(4);
+    let mut cb = b.chunks_exact(4);
     for (x, y) in (&mut ca).zip(&mut cb) {
-        s0 += x[0] * y[0];
-        s1 += x[1] * y[1];
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
     }
+    let mut rest = 0.0;
     for (x, y) in ca.remainder().iter().zip(cb.remainder()) {
-        s0 += x * y;
+        rest += x * y;
     }
-    s0 + s1
+    (acc[0] + acc[2]) + (acc[1] + acc[3]) + rest
 }
 
 /// `x^T A x`.
