@@ -123,8 +123,11 @@ impl Enclosure {
         self.points_with(mesh, solid, |s| labels[s], members, label)
     }
 
-    /// Like [`Enclosure::points`], with the labelling given as a function. `members` must be
-    /// exactly the samples that `label_of` maps to `label`.
+    /// Like [`Enclosure::points`], with the labelling given as a function. `members` are
+    /// samples that `label_of` maps to `label`, usually all of them. A neighbour outside
+    /// `members` counts as another part's: for a subset of the part, the result then also
+    /// has the centres of the faces between the subset and the rest of the part, which lie
+    /// inside the part's hull (the tightening relies on this to add a layer to a part).
     pub fn points_with(
         &self,
         mesh: &Mesh,
@@ -161,7 +164,6 @@ impl Enclosure {
                 if t == NONE {
                     interior = false;
                 } else if !member(t as usize) {
-                    debug_assert_ne!(label_of(t as usize), label);
                     interior = false;
                     let d = g.coords[t as usize];
                     lat.push([
