@@ -20,7 +20,8 @@
 //! Triangle enclosure is exact where one volume holds all three corners (volumes are
 //! convex). Otherwise the triangle is subdivided, branch and bound, for the largest distance
 //! of its points to the union of the volumes: a piece is settled when one volume holds its
-//! corners, and refined until it is smaller than a tolerance.
+//! corners, and refined until it is smaller than a tolerance; the largest escape is found
+//! to a relative precision of 1e-3.
 use glam::{DVec2, DVec3};
 
 use crate::{BoundingVolume, Error, Mesh, Shape};
@@ -242,6 +243,8 @@ struct Vol {
     center: DVec3,
     rows: [DVec3; 3],
     radii: [f64; 3],
+    /// Radius of a sphere about the centre holding the volume (with room for the slack).
+    rmax: f64,
     lo: DVec3,
     hi: DVec3,
 }
@@ -275,6 +278,11 @@ impl Vol {
             center: v.center,
             rows,
             radii,
+            rmax: if obb {
+                v.radii.length()
+            } else {
+                v.radii.max_element()
+            } * 1.000_001,
             lo: v.center - half,
             hi: v.center + half,
         }
@@ -354,12 +362,38 @@ impl Vol {
 // ---------------------------------------------------------------- triangle enclosure
 
 /// Pieces examined per triangle before the search settles for what it has found.
-const MAX_PIECES: usize = 200_000;
+const MAX_PIECES: usize = 50_000;
+
+/// Relative precision of a triangle's largest escape distance.
+const ESCAPE_PRECISION: f64 = 1e-3;
 
 /// Status and largest escape distance (absolute) of every triangle.
 fn triangle_enclosure(mesh: &Mesh, vols: &[Vol], tol: f64) -> Vec<(TriangleStatus, f64)> {
     let ids: Vec<usize> = (0..mesh.triangles().len()).collect();
     crate::parallel::map_chunked(&ids, 64, |&t| check_triangle(mesh.corners(t), vols, tol))
+}
+
+/// For each volume, a value `>= ` its distance from `p`, exact for the nearest volumes: the
+/// distance to the centre stands in for volumes that cannot be the nearest (their bounding
+/// sphere is farther than a volume already measured), which keeps both bounds of the search
+/// valid and skips most of the costly ellipsoid distances.
+fn distances(p: DVec3, vols: &[Vol]) -> Vec<f64> {
+    let mut out: Vec<f64> = vols.iter().map(|v| (p - v.center).length()).collect();
+    let mut order: Vec<(f64, usize)> = vols
+        .iter()
+        .enumerate()
+        .map(|(j, v)| (out[j] - v.rmax, j))
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut nearest = f64::INFINITY;
+    for (lower, j) in order {
+        if lower > nearest {
+            break;
+        }
+        out[j] = vols[j].distance(p);
+        nearest = nearest.min(out[j]);
+    }
+    out
 }
 
 fn check_triangle(c: [DVec3; 3], vols: &[Vol], tol: f64) -> (TriangleStatus, f64) {
@@ -370,7 +404,7 @@ fn check_triangle(c: [DVec3; 3], vols: &[Vol], tol: f64) -> (TriangleStatus, f64
     // distance is convex, so over a piece it peaks at a corner: min over volumes of the
     // corners' largest distance bounds the piece from above, the corners' own distances to
     // the union bound it from below.
-    let dist = |p: DVec3| -> Vec<f64> { vols.iter().map(|v| v.distance(p)).collect() };
+    let dist = |p: DVec3| -> Vec<f64> { distances(p, vols) };
     let mut best = 0.0f64;
     let mut unproven = false;
     let corner_d = [dist(c[0]), dist(c[1]), dist(c[2])];
@@ -385,7 +419,10 @@ fn check_triangle(c: [DVec3; 3], vols: &[Vol], tol: f64) -> (TriangleStatus, f64
         let upper = (0..vols.len())
             .map(|j| d[0][j].max(d[1][j]).max(d[2][j]))
             .fold(f64::INFINITY, f64::min);
-        if upper == 0.0 || upper <= best {
+        // Held by one volume, or unable to beat the escape found so far by more than its
+        // relative precision (without that, a stretch of triangle at a near-constant
+        // distance would be refined down to the tolerance all along).
+        if upper == 0.0 || upper <= best * (1.0 + ESCAPE_PRECISION) {
             continue;
         }
         let size = (p[1] - p[0])
@@ -1022,6 +1059,38 @@ mod tests {
             ..opts(30_000)
         };
         assert!(verify(&m, &[v], &o).is_err());
+    }
+
+    #[test]
+    fn pruned_distances_bound_the_exact_ones_and_keep_the_nearest() {
+        let mut rng = crate::rng::Rng::new(3);
+        let mut r = || rng.next_f64() * 2.0 - 1.0;
+        let vols: Vec<Vol> = (0..30)
+            .map(|i| {
+                let axes = DMat3::from_euler(glam::EulerRot::XYZ, r() * 3.0, r() * 3.0, r() * 3.0);
+                Vol::new(&BoundingVolume {
+                    shape: if i % 2 == 0 {
+                        Shape::Obb
+                    } else {
+                        Shape::Ellipsoid
+                    },
+                    center: DVec3::new(r(), r(), r()) * 5.0,
+                    axes,
+                    radii: DVec3::new(r().abs(), r().abs(), r().abs()) * 2.0 + 0.01,
+                })
+            })
+            .collect();
+        for _ in 0..500 {
+            let p = DVec3::new(r(), r(), r()) * 8.0;
+            let fast = distances(p, &vols);
+            let exact: Vec<f64> = vols.iter().map(|v| v.distance(p)).collect();
+            let min_exact = exact.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            let min_fast = fast.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            assert_eq!(min_fast, min_exact);
+            for (f, e) in fast.iter().zip(&exact) {
+                assert!(f >= e);
+            }
+        }
     }
 
     #[test]
