@@ -236,49 +236,110 @@ test('clicking the controls in the page runs with them', async () => {
   await page.close();
 });
 
-test('a mesh opened through the file dialog is what runs', async () => {
-  // A box 2 x 1 x 1 as an OBJ file, picked in the browser's file chooser.
-  const dir = mkdtempSync(join(tmpdir(), 'bvseg-open-'));
-  const file = join(dir, 'brick.obj');
-  const v = [0, 1, 2, 3, 4, 5, 6, 7].map((i) => `v ${2 * (i & 1)} ${(i >> 1) & 1} ${(i >> 2) & 1}`);
-  const f = ['1 3 2', '2 3 4', '5 6 7', '6 8 7', '1 2 5', '2 6 5', '3 7 4', '4 7 8', '1 5 3',
-    '3 5 7', '2 4 6', '4 8 6'].map((t) => `f ${t}`);
-  writeFileSync(file, [...v, ...f].join('\n') + '\n');
-  const page = await context.newPage();
-  await page.goto(`${base}/index.html`);
-  await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Mesh'), null, {
-    timeout: 60_000,
+// A box 2 x 1 x 1: eight corners and twelve outward triangles (indices from 0).
+const BRICK_V = [0, 1, 2, 3, 4, 5, 6, 7].map((i) => [2 * (i & 1), (i >> 1) & 1, (i >> 2) & 1]);
+const BRICK_T = [[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4], [2, 6, 3],
+  [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]];
+
+function brickObj() {
+  const v = BRICK_V.map((p) => `v ${p.join(' ')}`);
+  const f = BRICK_T.map((t) => `f ${t.map((i) => i + 1).join(' ')}`);
+  return Buffer.from([...v, ...f].join('\n') + '\n');
+}
+
+/** Binary STL: every triangle with its own corners (loading welds them). */
+function brickStl() {
+  const b = Buffer.alloc(84 + 50 * BRICK_T.length);
+  b.writeUInt32LE(BRICK_T.length, 80);
+  BRICK_T.forEach((t, k) => {
+    const at = 84 + 50 * k + 12; // the normal stays zero: readers recompute it
+    t.forEach((i, j) => BRICK_V[i].forEach((c, a) => b.writeFloatLE(c, at + 12 * j + 4 * a)));
   });
-  const click = async (label) => {
-    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
-    assert.equal(r.length, 4, `no widget "${label}"`);
-    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
-    await page.waitForTimeout(300);
+  return b;
+}
+
+/** Binary glTF: one indexed primitive. */
+function brickGlb() {
+  const pos = Buffer.alloc(12 * BRICK_V.length);
+  BRICK_V.flat().forEach((c, i) => pos.writeFloatLE(c, 4 * i));
+  const idx = Buffer.alloc(4 * 3 * BRICK_T.length);
+  BRICK_T.flat().forEach((v, i) => idx.writeUInt32LE(v, 4 * i));
+  const bin = Buffer.concat([pos, idx]);
+  let json = Buffer.from(JSON.stringify({
+    asset: { version: '2.0' },
+    scene: 0, scenes: [{ nodes: [0] }], nodes: [{ mesh: 0 }],
+    meshes: [{ primitives: [{ attributes: { POSITION: 0 }, indices: 1 }] }],
+    accessors: [
+      { bufferView: 0, componentType: 5126, count: BRICK_V.length, type: 'VEC3', min: [0, 0, 0], max: [2, 1, 1] },
+      { bufferView: 1, componentType: 5125, count: 3 * BRICK_T.length, type: 'SCALAR' },
+    ],
+    bufferViews: [
+      { buffer: 0, byteOffset: 0, byteLength: pos.length },
+      { buffer: 0, byteOffset: pos.length, byteLength: idx.length },
+    ],
+    buffers: [{ byteLength: bin.length }],
+  }));
+  json = Buffer.concat([json, Buffer.alloc((4 - (json.length % 4)) % 4, 0x20)]);
+  const header = Buffer.alloc(12);
+  header.write('glTF', 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(12 + 8 + json.length + 8 + bin.length, 8);
+  const chunk = (data, type) => {
+    const h = Buffer.alloc(8);
+    h.writeUInt32LE(data.length, 0);
+    h.write(type, 4, 'latin1');
+    return Buffer.concat([h, data]);
   };
-  await click('Mesh');
-  const chooser = page.waitForEvent('filechooser', { timeout: 10_000 });
-  await click('Open file…');
-  await (await chooser).setFiles(file);
-  await page.waitForTimeout(500);
-  await click('Boxes');
-  await click('Fixed k');
-  await click('Run');
-  await page.waitForFunction(
-    () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
-    null,
-    { timeout: TIMEOUT_MS, polling: 100 },
-  );
-  assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
-  const r = JSON.parse(await page.locator('#bvseg-result').textContent());
-  assert.equal(r.mesh, 'brick.obj');
-  assert.equal(r.kind, 'obb');
-  assert.equal(r.k, 8);
-  // Boxes around the parts of a box: little outside volume.
-  assert.ok(Number.isFinite(r.tov) && r.tov < 1, `TOV ${r.tov}`);
-  console.log(`# brick.obj, 8 boxes: TOV ${r.tov.toFixed(4)}`);
-  await page.close();
-  rmSync(dir, { recursive: true, force: true });
-});
+  return Buffer.concat([header, chunk(json, 'JSON'), chunk(bin, 'BIN\0')]);
+}
+
+for (const [name, bytes] of [['brick.obj', brickObj], ['brick.glb', brickGlb], ['brick.stl', brickStl]]) {
+  test(`${name} opened through the file dialog is what runs`, async () => {
+    const dir = mkdtempSync(join(tmpdir(), 'bvseg-open-'));
+    const file = join(dir, name);
+    writeFileSync(file, bytes());
+    const page = await context.newPage();
+    await page.goto(`${base}/index.html`);
+    await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Mesh'), null, {
+      timeout: 60_000,
+    });
+    const click = async (label) => {
+      const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+      assert.equal(r.length, 4, `no widget "${label}"`);
+      await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+      await page.waitForTimeout(300);
+    };
+    await click('Mesh');
+    const chooser = page.waitForEvent('filechooser', { timeout: 10_000 });
+    await click('Open file…');
+    const fc = await chooser;
+    // The dialog offers every format the viewer reads.
+    const accept = await fc.element().getAttribute('accept');
+    for (const ext of ['.obj', '.gltf', '.glb', '.stl']) {
+      assert.ok(accept.split(',').map((a) => a.trim()).includes(ext), `accept="${accept}"`);
+    }
+    await fc.setFiles(file);
+    await page.waitForTimeout(500);
+    await click('Boxes');
+    await click('Fixed k');
+    await click('Run');
+    await page.waitForFunction(
+      () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+      null,
+      { timeout: TIMEOUT_MS, polling: 100 },
+    );
+    assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
+    const r = JSON.parse(await page.locator('#bvseg-result').textContent());
+    assert.equal(r.mesh, name);
+    assert.equal(r.kind, 'obb');
+    assert.equal(r.k, 8);
+    // Boxes around the parts of a box: little outside volume.
+    assert.ok(Number.isFinite(r.tov) && r.tov < 1, `TOV ${r.tov}`);
+    console.log(`# ${name}, 8 boxes: TOV ${r.tov.toFixed(4)}`);
+    await page.close();
+    rmSync(dir, { recursive: true, force: true });
+  });
+}
 
 test('an unknown mesh name ends in "bvseg: error"', async () => {
   const { page, title, text } = await runPage('mesh=no-such-mesh&autorun=1');

@@ -10,14 +10,12 @@
 //! - [`meshes`]: the bundled sample meshes and the one function that turns file bytes into a mesh.
 //! - [`scene`], [`camera`], [`render`]: the 3D view (CPU geometry, orbit camera, glow renderer).
 //! - [`plot`]: TOV and MOV against k.
-//! - [`glb`]: the result as a binary glTF file.
 //! - [`platform`]: what differs between native and web (reporting, files).
 #![warn(missing_docs)]
 
 pub mod app;
 pub mod budget;
 pub mod camera;
-pub mod glb;
 pub mod meshes;
 pub mod platform;
 pub mod plot;
@@ -28,5 +26,5 @@ pub mod session;
 mod web;
 
 pub use app::{Export, Settings, StartMesh, StartOptions, Status, ViewerApp};
-pub use meshes::{load_mesh_bytes, BundledMesh, BUNDLED};
+pub use meshes::{load_mesh_bytes, BundledMesh, LoadedFile, BUNDLED};
 pub use session::{Session, Snapshot};

@@ -23,7 +23,7 @@ mod native {
     use bvseg_viewer::{load_mesh_bytes, meshes};
 
     const USAGE: &str = "usage: bvseg-viewer [--run] [MESH]\n\n\
-        Shows MESH (a mesh file: .obj), or the bundled bunny, and segments it interactively.\n\
+        Shows MESH (.obj, .gltf, .glb or .stl), or the bundled bunny, and segments it interactively.\n\
         --run    start a run with the default settings and print its summary on stdout";
 
     fn load(path: &str) -> Result<StartMesh, String> {
@@ -32,8 +32,15 @@ mod native {
             .map_or_else(|| path.to_string(), |n| n.to_string_lossy().into_owned());
         let bytes = std::fs::read(path).map_err(|e| format!("{path}: cannot read: {e}"))?;
         // Errors name the path given, not just the file name.
-        let mesh = load_mesh_bytes(&bytes, &name).map_err(|e| e.replacen(&name, path, 1))?;
-        Ok(StartMesh::Loaded { name, mesh })
+        let file = load_mesh_bytes(&bytes, &name).map_err(|e| e.replacen(&name, path, 1))?;
+        for w in &file.warnings {
+            eprintln!("bvseg-viewer: warning: {path}: {w}");
+        }
+        Ok(StartMesh::Loaded {
+            name,
+            mesh: file.mesh,
+            warnings: file.warnings,
+        })
     }
 
     pub fn main() -> ExitCode {

@@ -43,29 +43,54 @@ pub fn bundled(name: &str) -> Option<&'static BundledMesh> {
 
 /// Loads a bundled mesh; the bundled files are valid, but the error path is kept honest.
 pub fn load_bundled(m: &BundledMesh) -> Result<Mesh, String> {
-    load_mesh_bytes(m.bytes, m.file)
+    load_mesh_bytes(m.bytes, m.file).map(|l| l.mesh)
 }
 
-/// The formats [`load_mesh_bytes`] reads, as a hint for the user.
-pub const SUPPORTED: &str = ".obj";
+/// The formats [`load_mesh_bytes`] reads, as a hint for the user and as the `accept`
+/// attribute of the browser's file dialog (`bvseg_io::MESH_EXTENSIONS`, checked by a test).
+pub const SUPPORTED: &str = ".obj, .gltf, .glb, .stl";
 
-/// Turns the bytes of a mesh file into a mesh, choosing the reader by `name`'s extension.
-/// Every way into the viewer (bundled meshes, open file, drag and drop, the command line) goes
-/// through here, so adding a format is a change in this one place. The error is one line
-/// naming the file.
-pub fn load_mesh_bytes(bytes: &[u8], name: &str) -> Result<Mesh, String> {
-    let ext = std::path::Path::new(name)
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("obj") => bvseg_io::load_obj_from_bytes(bytes, name).map_err(|e| e.to_string()),
-        Some(e) => Err(format!(
-            "{name}: unsupported mesh format .{e} (supported: {SUPPORTED})"
-        )),
-        None => Err(format!(
-            "{name}: no file extension, cannot tell the format (supported: {SUPPORTED})"
-        )),
+/// A mesh read from a file, with what the user should know about it.
+#[derive(Debug, Clone)]
+pub struct LoadedFile {
+    /// The welded, validated mesh.
+    pub mesh: Mesh,
+    /// One line per thing loading changed or found wrong (welded vertices, holes, ...).
+    pub warnings: Vec<String>,
+}
+
+/// Turns the bytes of a mesh file into a mesh through `bvseg_io`'s loaders (OBJ, glTF, GLB,
+/// STL), choosing the reader by `name`'s extension. Every way into the viewer (bundled
+/// meshes, open file, drag and drop, the command line) goes through here. The error is one
+/// line naming the file; a `.gltf` whose buffers are separate files cannot be read from
+/// bytes alone, and its error says to use `.glb` or embedded buffers.
+pub fn load_mesh_bytes(bytes: &[u8], name: &str) -> Result<LoadedFile, String> {
+    let loaded = bvseg_io::load_mesh_from_bytes(bytes, name).map_err(|e| e.to_string())?;
+    let warnings = load_warnings(&loaded);
+    Ok(LoadedFile {
+        mesh: loaded.mesh,
+        warnings,
+    })
+}
+
+/// The load notes worth a line each (as the command line's `bvseg info` words them).
+fn load_warnings(loaded: &bvseg_io::LoadedMesh) -> Vec<String> {
+    let s = loaded.stats;
+    let mut w = Vec::new();
+    if s.welded > 0 || s.degenerate > 0 {
+        w.push(format!(
+            "welded {} coincident vertices, dropped {} degenerate triangles",
+            s.welded, s.degenerate
+        ));
     }
+    w.extend(loaded.report.warnings());
+    let r = &loaded.report;
+    // The command line's test: a volume negligible against the bounding box's.
+    let size = (r.bbox_max - r.bbox_min).max_element();
+    if r.volume.abs() <= 1e-9 * size.powi(3) {
+        w.push("the mesh encloses no volume (flat or open): it cannot be segmented".into());
+    }
+    w
 }
 
 #[cfg(test)]
@@ -90,5 +115,47 @@ mod tests {
         assert!(e.contains("model.xyz") && e.contains(".xyz"), "{e}");
         let e = load_mesh_bytes(b"", "README").unwrap_err();
         assert!(e.contains("README"), "{e}");
+        let e = load_mesh_bytes(b"solid x\nendsolid x\n", "empty.stl").unwrap_err();
+        assert!(e.contains("empty.stl") && !e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn the_dialog_accepts_every_format_the_library_reads() {
+        let listed: Vec<&str> = SUPPORTED.split(", ").collect();
+        let expected: Vec<String> = bvseg_io::MESH_EXTENSIONS
+            .iter()
+            .map(|e| format!(".{e}"))
+            .collect();
+        assert_eq!(listed, expected);
+    }
+
+    #[test]
+    fn ascii_stl_loads_with_its_welding_reported() {
+        // A tetrahedron, each triangle with its own corners.
+        let p = ["0 0 0", "1 0 0", "0 1 0", "0 0 1"];
+        let mut stl = String::from("solid t\n");
+        for t in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+            stl.push_str("facet normal 0 0 0\nouter loop\n");
+            for i in t {
+                stl.push_str(&format!("vertex {}\n", p[i]));
+            }
+            stl.push_str("endloop\nendfacet\n");
+        }
+        stl.push_str("endsolid t\n");
+        let f = load_mesh_bytes(stl.as_bytes(), "TET.STL").unwrap();
+        assert_eq!(f.mesh.vertices().len(), 4);
+        assert_eq!(f.mesh.triangles().len(), 4);
+        assert_eq!(
+            f.warnings,
+            ["welded 8 coincident vertices, dropped 0 degenerate triangles"]
+        );
+        // A single triangle encloses nothing: said, not refused (the run will fail).
+        let flat = "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid f\n";
+        let f = load_mesh_bytes(flat.as_bytes(), "flat.stl").unwrap();
+        assert!(
+            f.warnings.iter().any(|w| w.contains("encloses no volume")),
+            "{:?}",
+            f.warnings
+        );
     }
 }

@@ -14,27 +14,10 @@ pub const VERTEX_FLOATS: usize = 10;
 /// The plain mesh colour (a warm light grey).
 pub const MESH_COLOR: [f32; 3] = [0.80, 0.77, 0.70];
 
-/// Colour of part `i`: hues spread by the golden ratio, so neighbours in index differ.
+/// Colour of part `i`: the palette of `bvseg_io`'s exports, so that a saved GLB shows the
+/// parts in the colours of the view.
 pub fn part_color(i: usize) -> [f32; 3] {
-    let h = (i as f32 * 0.618_034 + 0.08).fract();
-    let s = if i & 1 == 0 { 0.65 } else { 0.5 };
-    hsv(h, s, 0.95)
-}
-
-fn hsv(h: f32, s: f32, v: f32) -> [f32; 3] {
-    let h6 = h * 6.0;
-    let c = v * s;
-    let x = c * (1.0 - (h6 % 2.0 - 1.0).abs());
-    let (r, g, b) = match h6 as u32 {
-        0 => (c, x, 0.0),
-        1 => (x, c, 0.0),
-        2 => (0.0, c, x),
-        3 => (0.0, x, c),
-        4 => (x, 0.0, c),
-        _ => (c, 0.0, x),
-    };
-    let m = v - c;
-    [r + m, g + m, b + m]
+    bvseg_io::export::part_color(i).map(|c| c as f32)
 }
 
 /// How the bounding volumes are drawn.

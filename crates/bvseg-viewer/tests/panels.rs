@@ -6,6 +6,7 @@ use std::rc::Rc;
 use bvseg_core::{BoundingKind, Shape};
 use bvseg_viewer::app::{Export, StartMesh, StartOptions, Status, ViewerApp};
 use bvseg_viewer::platform::Report;
+use eframe::egui::accesskit::Role;
 use egui_kittest::kittest::{Key, Queryable};
 use egui_kittest::Harness;
 
@@ -133,6 +134,16 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
         std::fs::read(&out).unwrap_or_else(|e| panic!("no GLB ({e}): {:?}", h.state().status()));
     assert_eq!(glb, h.state().export_bytes(Export::Glb).unwrap());
     assert_eq!(&glb[..4], b"glTF");
+    // The GLB holds the segmented mesh, which reads back whole.
+    let options = bvseg_io::LoadOptions {
+        mesh: Some("input_mesh".into()),
+        ..Default::default()
+    };
+    let back = bvseg_io::load_mesh_from_bytes_with(&glb, "dog.glb", &options).unwrap();
+    assert_eq!(
+        back.mesh.triangles().len(),
+        h.state().result().unwrap().triangle_parts.len()
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -179,4 +190,144 @@ fn dropped_files_are_loaded_through_the_same_reader() {
         Some("tiny.obj"),
         "a bad file keeps the mesh"
     );
+}
+
+/// `mesh` as a binary STL file: unshared corners, as STL stores them.
+fn stl_bytes(mesh: &bvseg_core::Mesh) -> Vec<u8> {
+    let mut b = vec![0u8; 80];
+    b.extend_from_slice(&(mesh.triangles().len() as u32).to_le_bytes());
+    for t in mesh.triangles() {
+        let p = t.map(|i| mesh.vertices()[i as usize]);
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        for v in [n, p[0], p[1], p[2]] {
+            for c in v.to_array() {
+                b.extend_from_slice(&(c as f32).to_le_bytes());
+            }
+        }
+        b.extend_from_slice(&[0, 0]);
+    }
+    b
+}
+
+/// `mesh` as a minimal GLB file: one indexed primitive, shared vertices.
+fn glb_bytes(mesh: &bvseg_core::Mesh) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    for v in mesh.vertices() {
+        for c in v.to_array() {
+            bin.extend_from_slice(&(c as f32).to_le_bytes());
+        }
+    }
+    let positions = bin.len();
+    for i in mesh.triangles().iter().flatten() {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let (lo, hi) = mesh.bbox();
+    let f32s = |v: glam::DVec3| v.to_array().map(|c| c as f32);
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"name": "model", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": mesh.vertices().len(), "type": "VEC3",
+             "min": f32s(lo), "max": f32s(hi)},
+            {"bufferView": 1, "componentType": 5125, "count": 3 * mesh.triangles().len(), "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": positions},
+            {"buffer": 0, "byteOffset": positions, "byteLength": bin.len() - positions}
+        ],
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    let mut json = serde_json::to_vec(&json).unwrap();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((28 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// Opens `path` as a user would natively: Mesh -> Open file…, type the path, Open.
+fn open_through_dialog(h: &mut Harness<'_, ViewerApp>, path: &std::path::Path) {
+    // "Mesh" also heads a row of the statistics: the menu is the button.
+    h.get_by_role_and_label(Role::Button, "Mesh").click();
+    h.run_steps(2);
+    h.get_by_label("Open file…").click();
+    h.run_steps(2);
+    let field = "Path of a mesh file (.obj, .gltf, .glb, .stl):";
+    h.get_by_label(field).focus();
+    h.run_steps(1);
+    h.get_by_label(field).type_text(path.to_str().unwrap());
+    h.run_steps(1);
+    h.get_by_label("Open").click();
+    h.run_steps(2);
+}
+
+#[test]
+fn glb_and_stl_files_open_through_the_dialog_and_run() {
+    let bunny = bvseg_viewer::meshes::load_bundled(&bvseg_viewer::BUNDLED[0]).unwrap();
+    let dir = std::env::temp_dir().join(format!("bvseg-viewer-formats-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (mut h, _) = harness("spot");
+    h.run_steps(2);
+    h.get_by_label("Fixed k").click();
+    h.run_steps(2);
+    enter(&mut h, "k", "3");
+    enter(&mut h, "Samples", "3000");
+
+    for (file, bytes) in [
+        ("bunny.glb", glb_bytes(&bunny)),
+        ("bunny.stl", stl_bytes(&bunny)),
+    ] {
+        let path = dir.join(file);
+        std::fs::write(&path, bytes).unwrap();
+        open_through_dialog(&mut h, &path);
+        assert_eq!(
+            h.state().mesh_name(),
+            Some(file),
+            "{:?}",
+            h.state().status()
+        );
+        assert_eq!(*h.state().status(), Status::Idle);
+        h.get_by_label("Run").click();
+        h.step();
+        run_to_end(&mut h);
+        let res = result_of(&h);
+        assert_eq!(res.metrics.k, 3, "{file}");
+        assert_eq!(res.triangle_parts.len(), bunny.triangles().len(), "{file}");
+        assert!(
+            res.metrics.tov.is_finite() && res.metrics.tov > 0.0,
+            "{file}"
+        );
+    }
+    // STL stores every triangle's corners apart: loading welds them, and the UI says so.
+    let warnings = h.state().load_warnings().to_vec();
+    assert!(
+        warnings.iter().any(|w| w.starts_with("welded ")),
+        "{warnings:?}"
+    );
+    h.get_by_label_contains("Warning: welded ");
+
+    // A glTF whose buffer is a separate file cannot be read from its bytes alone.
+    let gltf = br#"{"asset":{"version":"2.0"},"buffers":[{"uri":"bunny.bin","byteLength":12}]}"#;
+    h.state_mut().load_bytes("bunny.gltf", gltf);
+    h.run_steps(2);
+    let Status::Failed(msg) = h.state().status().clone() else {
+        panic!("expected a failure: {:?}", h.state().status());
+    };
+    assert!(
+        msg.contains("bunny.gltf") && msg.contains("external") && msg.contains(".glb"),
+        "{msg}"
+    );
+    h.get_by_label(&msg);
+    assert_eq!(h.state().mesh_name(), Some("bunny.stl"), "the mesh is kept");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

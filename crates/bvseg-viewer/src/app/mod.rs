@@ -96,6 +96,8 @@ pub enum StartMesh {
         name: String,
         /// The mesh.
         mesh: Mesh,
+        /// What loading changed or found wrong, shown with the mesh's statistics.
+        warnings: Vec<String>,
     },
 }
 
@@ -124,6 +126,7 @@ struct Model {
     name: String,
     mesh: Arc<Mesh>,
     geometry: Arc<MeshGeometry>,
+    warnings: Vec<String>,
 }
 
 /// What the current scene geometry was built from; rebuilt when this changes.
@@ -254,7 +257,11 @@ impl ViewerApp {
                     ));
                 }
             },
-            StartMesh::Loaded { name, mesh } => app.set_model(name, mesh),
+            StartMesh::Loaded {
+                name,
+                mesh,
+                warnings,
+            } => app.set_model(name, mesh, warnings),
         }
         app.pending_run = start.autorun && app.model.is_some();
         app
@@ -290,6 +297,11 @@ impl ViewerApp {
         self.model.as_ref().map(|m| m.name.as_str())
     }
 
+    /// What loading the mesh changed or found wrong, one line each (shown in the UI).
+    pub fn load_warnings(&self) -> &[String] {
+        self.model.as_ref().map_or(&[], |m| m.warnings.as_slice())
+    }
+
     /// The highlighted part.
     pub fn selected_part(&self) -> Option<usize> {
         self.selected_part
@@ -314,18 +326,19 @@ impl ViewerApp {
     /// Loads a mesh file's bytes (any way in: menu, dialog, drop), reporting errors in the UI.
     pub fn load_bytes(&mut self, name: &str, bytes: &[u8]) {
         match meshes::load_mesh_bytes(bytes, name) {
-            Ok(mesh) => self.set_model(name.to_string(), mesh),
+            Ok(f) => self.set_model(name.to_string(), f.mesh, f.warnings),
             Err(e) => self.fail(e),
         }
     }
 
-    fn set_model(&mut self, name: String, mesh: Mesh) {
+    fn set_model(&mut self, name: String, mesh: Mesh, warnings: Vec<String>) {
         let geometry = Arc::new(MeshGeometry::new(&mesh));
         self.camera = OrbitCamera::framing(geometry.radius);
         self.model = Some(Model {
             name,
             mesh: Arc::new(mesh),
             geometry,
+            warnings,
         });
         self.model_id += 1;
         self.session = None;

@@ -101,10 +101,7 @@ impl ViewerApp {
         let res = self.result()?;
         Some(match export {
             Export::Json => bvseg_io::to_json_string(res).into_bytes(),
-            Export::Glb => {
-                let volumes: Vec<_> = res.parts.iter().map(|p| p.volume).collect();
-                crate::glb::glb(&self.model.as_ref()?.geometry, &volumes)
-            }
+            Export::Glb => bvseg_io::export::to_glb(res, Some(&self.model.as_ref()?.mesh)),
         })
     }
 
@@ -348,6 +345,7 @@ impl ViewerApp {
                     row("Mesh", m.name.clone());
                     row("Triangles", m.mesh.triangles().len().to_string());
                 }
+
                 if let Some(s) = &self.session {
                     if s.samples() > 0 {
                         row("Samples", s.samples().to_string());
@@ -380,6 +378,9 @@ impl ViewerApp {
                     }
                 }
             });
+        for w in self.load_warnings() {
+            ui.label(RichText::new(format!("Warning: {w}")).color(WARNING));
+        }
         ui.separator();
         ui.heading("Parts");
         let Some(snap) = snap else {
@@ -427,6 +428,9 @@ impl ViewerApp {
         });
     }
 }
+
+/// Colour of the mesh's load warnings.
+const WARNING: Color32 = Color32::from_rgb(240, 190, 80);
 
 /// A control with a label that names it (for screen readers and the tests).
 fn labelled(ui: &mut egui::Ui, label: &str, widget: impl egui::Widget) {
