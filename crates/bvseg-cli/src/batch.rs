@@ -227,7 +227,7 @@ fn process(
     }
     let m = seg.metrics;
     let met = common::tolerances_met(&seg, params);
-    let warnings = common::load_warnings(&loaded);
+    let warnings = loaded.warnings();
     Ok(Row {
         file: file_name(path),
         status: "done",

@@ -181,14 +181,6 @@ pub fn load(
     Ok((name, loaded))
 }
 
-/// Whether the loaded surface encloses (next to) no volume, relative to its bounding box so
-/// that the test does not depend on units.
-pub fn encloses_no_volume(loaded: &LoadedMesh) -> bool {
-    let r = &loaded.report;
-    let size = r.bbox_max - r.bbox_min;
-    r.volume.abs() <= 1e-9 * size.max_element().powi(3)
-}
-
 /// Like [`load`], also refusing a mesh that encloses no volume, before any warning about
 /// it is printed: the user gets the one line that matters.
 pub fn load_solid(
@@ -197,7 +189,7 @@ pub fn load_solid(
     quiet: bool,
 ) -> anyhow::Result<(String, LoadedMesh)> {
     let (name, loaded) = load(path, input, quiet)?;
-    if encloses_no_volume(&loaded) {
+    if loaded.encloses_no_volume() {
         let r = &loaded.report;
         bail!(
             "{name}: the mesh encloses no volume (flat, open or degenerate: {} triangles, {} open edges)",
@@ -206,20 +198,6 @@ pub fn load_solid(
         );
     }
     Ok((name, loaded))
-}
-
-/// The load notes worth a warning line each.
-pub fn load_warnings(loaded: &LoadedMesh) -> Vec<String> {
-    let s = loaded.stats;
-    let mut w = Vec::new();
-    if s.welded > 0 || s.degenerate > 0 {
-        w.push(format!(
-            "welded {} coincident vertices, dropped {} degenerate triangles",
-            s.welded, s.degenerate
-        ));
-    }
-    w.extend(loaded.report.warnings());
-    w
 }
 
 /// Runs the segmentation with progress display, in a pool of `threads` when given.

@@ -25,8 +25,8 @@ pub struct InfoArgs {
 pub fn run(args: &InfoArgs) -> anyhow::Result<ExitCode> {
     let (name, loaded) = common::load(Some(&args.mesh), &args.input, true)?;
     let (s, r) = (loaded.stats, loaded.report);
-    let mut warnings = common::load_warnings(&loaded);
-    if common::encloses_no_volume(&loaded) {
+    let mut warnings = loaded.warnings();
+    if loaded.encloses_no_volume() {
         warnings.push("encloses no volume (flat or open): it cannot be segmented".into());
     }
     if args.json {

@@ -59,7 +59,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     check_outputs(args)?;
 
     let (name, loaded) = common::load_solid(args.mesh.as_deref(), &args.input, args.quiet)?;
-    let warnings = common::load_warnings(&loaded);
+    let warnings = loaded.warnings();
     if !args.quiet {
         for w in &warnings {
             eprintln!("bvseg: warning: {name}: {w}");

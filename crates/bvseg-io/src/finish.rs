@@ -48,6 +48,32 @@ pub struct LoadedMesh {
     pub dropped: Vec<usize>,
 }
 
+impl LoadedMesh {
+    /// Whether the surface encloses (next to) no volume, relative to its bounding box so
+    /// that the test does not depend on units. Such a mesh cannot be segmented.
+    pub fn encloses_no_volume(&self) -> bool {
+        let r = &self.report;
+        let size = r.bbox_max - r.bbox_min;
+        r.volume.abs() <= 1e-9 * size.max_element().powi(3)
+    }
+
+    /// What loading changed or found that a user should know, one line each: welded
+    /// vertices and dropped triangles, then the report's warnings (see
+    /// [`MeshReport::warnings`]).
+    pub fn warnings(&self) -> Vec<String> {
+        let s = self.stats;
+        let mut w = Vec::new();
+        if s.welded > 0 || s.degenerate > 0 {
+            w.push(format!(
+                "welded {} coincident vertices, dropped {} degenerate triangles",
+                s.welded, s.degenerate
+            ));
+        }
+        w.extend(self.report.warnings());
+        w
+    }
+}
+
 /// What loading changed, so that a front end can tell the user.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LoadStats {

@@ -66,31 +66,14 @@ pub struct LoadedFile {
 /// bytes alone, and its error says to use `.glb` or embedded buffers.
 pub fn load_mesh_bytes(bytes: &[u8], name: &str) -> Result<LoadedFile, String> {
     let loaded = bvseg_io::load_mesh_from_bytes(bytes, name).map_err(|e| e.to_string())?;
-    let warnings = load_warnings(&loaded);
+    let mut warnings = loaded.warnings();
+    if loaded.encloses_no_volume() {
+        warnings.push("the mesh encloses no volume (flat or open): it cannot be segmented".into());
+    }
     Ok(LoadedFile {
         mesh: loaded.mesh,
         warnings,
     })
-}
-
-/// The load notes worth a line each (as the command line's `bvseg info` words them).
-fn load_warnings(loaded: &bvseg_io::LoadedMesh) -> Vec<String> {
-    let s = loaded.stats;
-    let mut w = Vec::new();
-    if s.welded > 0 || s.degenerate > 0 {
-        w.push(format!(
-            "welded {} coincident vertices, dropped {} degenerate triangles",
-            s.welded, s.degenerate
-        ));
-    }
-    w.extend(loaded.report.warnings());
-    let r = &loaded.report;
-    // The command line's test: a volume negligible against the bounding box's.
-    let size = (r.bbox_max - r.bbox_min).max_element();
-    if r.volume.abs() <= 1e-9 * size.powi(3) {
-        w.push("the mesh encloses no volume (flat or open): it cannot be segmented".into());
-    }
-    w
 }
 
 #[cfg(test)]
