@@ -112,6 +112,25 @@ fn parse_document(json: &[u8], name: &str) -> Result<gltf::Document, IoError> {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         err(name, format!("not a valid glTF document: {msg}"))
     })?;
+    // gltf-json 1.4's validation indexes `accessors` with a primitive's POSITION index
+    // before checking it is in range, and panics on a bad one (found by fuzzing): check it
+    // first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(i) = prim.attributes.get(&pos) {
+                if i.value() >= root.accessors.len() {
+                    return Err(err(
+                        name,
+                        format!(
+                            "invalid glTF document: meshes[{m}].primitives[{p}].attributes\
+                             .POSITION: Index out of range"
+                        ),
+                    ));
+                }
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(&root, gltf::json::Path::new, &mut |path, e| {
         let path = path();
