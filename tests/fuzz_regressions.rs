@@ -32,6 +32,33 @@ fn volumes_json_regressions() {
 }
 
 #[test]
+fn gltf_regressions() {
+    replay("gltf", fuzz_input::check_gltf);
+}
+
+#[test]
+fn stl_regressions() {
+    replay("stl", fuzz_input::check_stl);
+}
+
+/// The glTF and STL fuzz seeds are valid meshes, so the targets' checks on a loaded mesh run.
+#[test]
+fn gltf_and_stl_seeds_load() {
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
+    for (dir, files) in [
+        ("gltf", &["tet.glb", "tet.gltf"][..]),
+        ("stl", &["tet_binary.stl", "tet_ascii.stl"][..]),
+    ] {
+        for f in files {
+            let bytes = std::fs::read(seeds.join(dir).join(f)).expect("seed present");
+            let loaded = bvseg_io::load_mesh_from_bytes(&bytes, f)
+                .unwrap_or_else(|e| panic!("seed {f}: {e}"));
+            assert_eq!(loaded.mesh.triangles().len(), 4, "{f}");
+        }
+    }
+}
+
+#[test]
 fn pipeline_regressions() {
     let n = replay("pipeline", |data| {
         if let Some((mesh, params)) = fuzz_input::pipeline_case(data) {

@@ -126,3 +126,47 @@ pub fn check_volumes_json(data: &[u8]) {
         Err(e) => assert!(!e.to_string().contains('\n')),
     }
 }
+
+/// A loaded mesh's cheap invariants: finite coordinates, indices in range, no repeated
+/// corner, and the dropped-triangle list increasing.
+fn check_loaded(loaded: &bvseg_io::LoadedMesh) {
+    let mesh = &loaded.mesh;
+    let nv = mesh.vertices().len();
+    assert!(
+        nv > 0 && !mesh.triangles().is_empty(),
+        "empty mesh accepted"
+    );
+    assert!(
+        mesh.vertices().iter().all(|v| v.is_finite()),
+        "non-finite vertex"
+    );
+    for t in mesh.triangles() {
+        assert!(
+            t.iter().all(|&i| (i as usize) < nv),
+            "index out of range: {t:?}"
+        );
+    }
+    assert!(loaded.dropped.windows(2).all(|w| w[0] < w[1]));
+    let _ = mesh.bbox();
+    let _ = mesh.signed_volume();
+}
+
+/// Mesh loading from bytes under `name` (its extension picks the reader): a mesh passing
+/// [`check_loaded`] or a one-line error.
+fn check_mesh_bytes(data: &[u8], name: &str) {
+    match bvseg_io::load_mesh_from_bytes(data, name) {
+        Ok(loaded) => check_loaded(&loaded),
+        Err(e) => assert!(!e.to_string().contains('\n'), "multi-line error: {e}"),
+    }
+}
+
+/// glTF loading: the same bytes read as a GLB container and as a JSON glTF document.
+pub fn check_gltf(data: &[u8]) {
+    check_mesh_bytes(data, "fuzz.glb");
+    check_mesh_bytes(data, "fuzz.gltf");
+}
+
+/// STL loading (binary or ASCII, as the reader decides).
+pub fn check_stl(data: &[u8]) {
+    check_mesh_bytes(data, "fuzz.stl");
+}

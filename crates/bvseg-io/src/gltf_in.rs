@@ -19,6 +19,11 @@ const MAX_DEPTH: usize = 256;
 /// Most node visits in one scene: a cycle through nodes with several children would
 /// otherwise be walked an exponential number of times before reaching [`MAX_DEPTH`].
 const MAX_NODE_VISITS: usize = 1_000_000;
+/// Most vertices a scene may add by instancing a mesh again (every instance after a mesh's
+/// first). A mesh's first instance is bounded by the file's size, its repeats are not: a
+/// 3 KB file instancing 20 primitives 100,000 times asked for gigabytes before reaching the
+/// triangle budget (found while fuzzing). 2^24 vertices are ~400 MB once read.
+const MAX_INSTANCED_VERTICES: usize = 1 << 24;
 
 fn err(name: &str, message: impl Into<String>) -> IoError {
     IoError::Parse {
@@ -66,6 +71,8 @@ pub(crate) fn read_gltf(
         scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
     stack.reverse();
     let mut visits = 0usize;
+    let mut instanced_meshes = std::collections::HashSet::new();
+    let mut instanced_vertices = 0usize;
     while let Some((node, parent, depth)) = stack.pop() {
         visits += 1;
         if depth > MAX_DEPTH || visits > MAX_NODE_VISITS {
@@ -81,6 +88,22 @@ pub(crate) fn read_gltf(
         if let Some(m) = node.mesh() {
             if mesh.is_none_or(|want| m.name() == Some(want)) {
                 found = true;
+                if !instanced_meshes.insert(m.index()) {
+                    let vertices = m
+                        .primitives()
+                        .filter_map(|p| p.get(&gltf::Semantic::Positions));
+                    instanced_vertices =
+                        instanced_vertices.saturating_add(vertices.map(|a| a.count()).sum());
+                    if instanced_vertices > MAX_INSTANCED_VERTICES {
+                        return Err(err(
+                            name,
+                            format!(
+                                "the scene instances its meshes into more than \
+                                 {MAX_INSTANCED_VERTICES} extra vertices; refusing to load"
+                            ),
+                        ));
+                    }
+                }
                 for prim in m.primitives() {
                     read_primitive(&prim, &world, &buffers, &mut raw, name)?;
                 }
@@ -112,6 +135,25 @@ fn parse_document(json: &[u8], name: &str) -> Result<gltf::Document, IoError> {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         err(name, format!("not a valid glTF document: {msg}"))
     })?;
+    // gltf-json 1.4's validation indexes `accessors` with a primitive's POSITION index
+    // before checking it is in range, and panics on a bad one (found by fuzzing): check it
+    // first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(i) = prim.attributes.get(&pos) {
+                if i.value() >= root.accessors.len() {
+                    return Err(err(
+                        name,
+                        format!(
+                            "invalid glTF document: meshes[{m}].primitives[{p}].attributes\
+                             .POSITION: Index out of range"
+                        ),
+                    ));
+                }
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(&root, gltf::json::Path::new, &mut |path, e| {
         let path = path();
@@ -527,5 +569,29 @@ mod tests {
         assert!(decode_base64("T!==").is_none());
         assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
         assert_eq!(percent_decode("a%2"), "a%2");
+    }
+
+    /// 2.7 KB instancing 20 primitives of 99 vertices 100,000 times: refused before reading
+    /// them, not after allocating gigabytes on the way to the triangle budget.
+    #[test]
+    fn instancing_amplification_is_refused_early() {
+        let bytes = include_bytes!(
+            "../../../tests/data/fuzz-regressions/gltf/instancing-amplification.gltf"
+        );
+        let e = read_gltf(bytes, "x.gltf", Externals::None, None).unwrap_err();
+        assert!(e.to_string().contains("instances its meshes"), "{e}");
+    }
+
+    /// gltf-json's validation panicked on this out-of-range POSITION index (fuzzing).
+    #[test]
+    fn position_index_out_of_range_is_an_error() {
+        let bytes = include_bytes!(
+            "../../../tests/data/fuzz-regressions/gltf/position-accessor-out-of-range.gltf"
+        );
+        let e = read_gltf(bytes, "x.gltf", Externals::None, None).unwrap_err();
+        assert!(
+            e.to_string().contains("POSITION: Index out of range"),
+            "{e}"
+        );
     }
 }
