@@ -61,7 +61,7 @@ pub fn ellipsoid(c: DVec3, radii: DVec3, rot: DMat3, n: usize) -> Mesh {
 
 /// Triangles closing a surface of revolution whose vertices are: the bottom pole (index 0),
 /// `m` rings of `n` vertices from bottom to top, and the top pole (index `count - 1`).
-fn stitch_rings(m: usize, n: usize, count: usize) -> Vec<[u32; 3]> {
+pub fn stitch_rings(m: usize, n: usize, count: usize) -> Vec<[u32; 3]> {
     let top = (count - 1) as u32;
     let ring = |r: usize, s: usize| (1 + r * n + s % n) as u32;
     let mut t = Vec::new();

@@ -307,25 +307,9 @@ mod tests {
     use glam::DMat3;
     use std::sync::Arc;
 
+    /// The unit cube `[0, 1]^3`.
     fn cube() -> Mesh {
-        let v: Vec<DVec3> = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
-            .collect();
-        let t = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        Mesh::new(v, t).unwrap()
+        bvseg_core::shapes::cuboid(DVec3::splat(0.5), DVec3::splat(0.5), DMat3::IDENTITY)
     }
 
     fn snapshot(shape: Shape) -> Snapshot {

@@ -57,19 +57,7 @@ pub(crate) fn unit_sphere(n: usize) -> UnitMesh {
         }
     }
     positions.push(DVec3::Z);
-    let top = (positions.len() - 1) as u32;
-    let ring = |r: usize, s: usize| (1 + r * n + s % n) as u32;
-    let mut triangles = Vec::new();
-    for s in 0..n {
-        triangles.push([0, ring(0, s + 1), ring(0, s)]);
-        triangles.push([top, ring(rings - 2, s), ring(rings - 2, s + 1)]);
-    }
-    for r in 0..rings - 2 {
-        for s in 0..n {
-            triangles.push([ring(r, s), ring(r, s + 1), ring(r + 1, s + 1)]);
-            triangles.push([ring(r, s), ring(r + 1, s + 1), ring(r + 1, s)]);
-        }
-    }
+    let triangles = bvseg_core::shapes::stitch_rings(rings - 1, n, positions.len());
     UnitMesh {
         normals: positions.clone(),
         positions,
