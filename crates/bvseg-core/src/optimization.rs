@@ -77,7 +77,7 @@ pub fn lloyd(
     // Whether each sample touches another part, kept up to date from the samples that moved.
     let mut is_boundary = vec![false; solid.len()];
     for &s in &samples {
-        is_boundary[s as usize] = on_boundary(&solid.grid, &part.labels, s);
+        is_boundary[s as usize] = on_boundary(&solid.grid, &part.labels, &is_active, s);
     }
     let mut last_touched: Vec<u32> = Vec::new();
     for sweep in 0..max_sweeps {
@@ -90,14 +90,14 @@ pub fn lloyd(
             // Only samples that changed part, and their neighbours, can change boundary status.
             let g = &solid.grid;
             for &s in &last_touched {
-                is_boundary[s as usize] = on_boundary(g, &part.labels, s);
+                is_boundary[s as usize] = on_boundary(g, &part.labels, &is_active, s);
                 for &t in &g.neighbors[s as usize] {
                     if t != NONE {
-                        is_boundary[t as usize] = on_boundary(g, &part.labels, t);
+                        is_boundary[t as usize] = on_boundary(g, &part.labels, &is_active, t);
                     }
                 }
             }
-            boundary_band(solid, &part.labels, &samples, k, &is_boundary)
+            boundary_band(solid, &part.labels, &samples, &is_active, &is_boundary)
         } else {
             (samples.clone(), Vec::new())
         };
@@ -306,23 +306,29 @@ fn leaves_safely(
     faces & !seen == 0
 }
 
-/// Whether sample `s` has a face neighbour in another part.
-fn on_boundary(g: &crate::sampling::Grid, labels: &[u32], s: u32) -> bool {
+/// Whether sample `s` has a face neighbour in another active part (samples only move
+/// between active parts, so a boundary with an inactive one is not where they move).
+fn on_boundary(g: &crate::sampling::Grid, labels: &[u32], is_active: &[bool], s: u32) -> bool {
     let l = labels[s as usize];
-    g.neighbors[s as usize]
-        .iter()
-        .any(|&t| t != NONE && labels[t as usize] != l)
+    g.neighbors[s as usize].iter().any(|&t| {
+        t != NONE && {
+            let m = labels[t as usize];
+            m != l && is_active[m as usize]
+        }
+    })
 }
 
-/// The samples of `scope` within two grid steps of a sample of another part (sorted), and
-/// the pairs of parts that touch there. `is_boundary` tells which samples touch another part.
+/// The samples of `scope` within two grid steps of a sample of another active part (sorted),
+/// and the pairs of active parts that touch there. `is_boundary` tells which samples touch
+/// another active part.
 fn boundary_band(
     solid: &Solid,
     labels: &[u32],
     scope: &[u32],
-    k: usize,
+    is_active: &[bool],
     is_boundary: &[bool],
 ) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let k = is_active.len();
     let g = &solid.grid;
     let mut mark = vec![false; labels.len()];
     let mut ring = Vec::new();
@@ -334,7 +340,7 @@ fn boundary_band(
         }
         let l = labels[s as usize];
         for &t in &g.neighbors[s as usize] {
-            if t != NONE && labels[t as usize] != l {
+            if t != NONE && labels[t as usize] != l && is_active[labels[t as usize] as usize] {
                 let m = labels[t as usize];
                 let bit = l.min(m) as usize * k + l.max(m) as usize;
                 touch[bit / 64] |= 1 << (bit % 64);

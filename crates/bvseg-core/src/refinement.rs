@@ -3,7 +3,9 @@
 //! 1. Start: a CVT with one part per connected piece of the solid (or `k` parts in fixed-k
 //!    mode), optimised.
 //! 2. Refine (tolerance mode): while TOV >= sigma_G or MOV >= sigma_L and k < max_k, split a
-//!    part and re-optimise it with its neighbours. While TOV is out of tolerance the part that
+//!    part and re-optimise it with its neighbours (at most [`LOCAL_SWEEPS`] Lloyd sweeps of
+//!    the halves, then the boundary polish; with two threads the next try is re-optimised
+//!    alongside, since a try is often undone). While TOV is out of tolerance the part that
 //!    adds the most outside volume is split, once only MOV is, the part with the largest OV
 //!    (the paper's choice). A split that does not improve the figure out of tolerance is
 //!    undone and the next part tried (up to [`SPLIT_TRIES`]); if every try fails the first is
@@ -33,6 +35,7 @@ use crate::initialization::{cvt, split};
 use crate::metrics::outside_from_cells;
 use crate::moments::Moments;
 use crate::optimization::optimize;
+use crate::parallel::{join, threads};
 use crate::partition::{Partition, Solid};
 use crate::sampling::Grid;
 use crate::tightening::{relieve_worst, tighten, Coverage};
@@ -44,7 +47,7 @@ use crate::{
 pub const TIGHTEN_PASSES: usize = 40;
 
 /// Of the tightening passes, how many judge every move (the others only those that gained).
-pub const TIGHTEN_FULL_PASSES: usize = 3;
+pub const TIGHTEN_FULL_PASSES: usize = 2;
 
 /// Passes of a tightening checkpoint during refinement (one of them full).
 pub const CHECKPOINT_PASSES: usize = 4;
@@ -66,7 +69,14 @@ pub const CHECKPOINT_STALL: usize = 4;
 pub const CHECKPOINT_GAIN: f64 = 0.03;
 
 /// How many parts a refinement step tries to split before keeping the first split anyway.
-pub const SPLIT_TRIES: usize = 4;
+/// More tries rarely found a better split on the shared meshes, and each costs a local
+/// re-optimisation.
+pub const SPLIT_TRIES: usize = 2;
+
+/// Lloyd sweeps of the two halves after a split, at most. A boundary between halves often
+/// drifts by one layer per sweep for a hundred sweeps, each gaining little; the boundary
+/// polish that follows makes those moves at a fraction of the cost.
+pub const LOCAL_SWEEPS: usize = 10;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -105,6 +115,8 @@ pub struct Segmenter {
     /// Parts left to try in the current split step, and the first try's result.
     tries: Vec<usize>,
     first_try: Option<State>,
+    /// The next try's partition, when it was prepared alongside the current one.
+    pending: Option<(usize, Partition)>,
     refine_steps: usize,
     /// k at the last tightening checkpoint.
     checkpoint_k: usize,
@@ -141,6 +153,7 @@ impl Segmenter {
             state: None,
             tries: Vec::new(),
             first_try: None,
+            pending: None,
             refine_steps: 0,
             checkpoint_k: 0,
             best_mov: f64::INFINITY,
@@ -213,6 +226,8 @@ impl Segmenter {
 
     /// Make `s` the current state, recording the step that led to it.
     fn accept(&mut self, kind: StepKind, s: State) -> Step {
+        // A try prepared ahead was split from the state being replaced.
+        self.pending = None;
         let step = self.record(kind, &s);
         self.state = Some(s);
         step
@@ -333,35 +348,23 @@ impl Segmenter {
         }
         while let Some(i) = self.tries.pop() {
             let cur = self.state.as_ref()?;
-            let Some(mut part) = split(&self.solid, &self.comps, &cur.part, i) else {
+            let part = match self.pending.take() {
+                Some((j, p)) if j == i => Some(p),
+                _ => {
+                    // With a second thread, the next try is re-optimised alongside this
+                    // one: the optimisation is serial, and the first try is often undone.
+                    let next = self.tries.last().copied().filter(|_| threads() > 1);
+                    let (this, ahead) = join(
+                        || self.try_split(cur, i),
+                        || next.and_then(|j| self.try_split(cur, j).map(|p| (j, p))),
+                    );
+                    self.pending = ahead;
+                    this
+                }
+            };
+            let Some(part) = part else {
                 continue;
             };
-            let mut active: Vec<u32> = cur
-                .part
-                .adjacency(&self.solid.grid)
-                .iter()
-                .filter_map(|&(a, b)| {
-                    if a as usize == i {
-                        Some(b)
-                    } else if b as usize == i {
-                        Some(a)
-                    } else {
-                        None
-                    }
-                })
-                .collect();
-            active.push(i as u32);
-            active.push(k as u32);
-            active.sort_unstable();
-            // The two halves settle by Lloyd sweeps; their neighbours adjust by boundary moves.
-            optimize(
-                &self.solid,
-                &self.comps,
-                &mut part,
-                Some(&[i as u32, k as u32]),
-                Some(&active),
-                self.params.max_sweeps,
-            );
             let cand = self.evaluate(part);
             let cur = self.state.as_ref()?;
             // A split is kept if it improves the figure that is out of tolerance (and, when
@@ -400,6 +403,39 @@ impl Segmenter {
                 None
             }
         }
+    }
+
+    /// Part `i` of `cur` split in two, and the halves re-optimised: Lloyd sweeps on the two
+    /// halves, boundary moves with their neighbours too. `None` if `i` cannot be split.
+    fn try_split(&self, cur: &State, i: usize) -> Option<Partition> {
+        let k = cur.part.k();
+        let mut part = split(&self.solid, &self.comps, &cur.part, i)?;
+        let mut active: Vec<u32> = cur
+            .part
+            .adjacency(&self.solid.grid)
+            .iter()
+            .filter_map(|&(a, b)| {
+                if a as usize == i {
+                    Some(b)
+                } else if b as usize == i {
+                    Some(a)
+                } else {
+                    None
+                }
+            })
+            .collect();
+        active.push(i as u32);
+        active.push(k as u32);
+        active.sort_unstable();
+        optimize(
+            &self.solid,
+            &self.comps,
+            &mut part,
+            Some(&[i as u32, k as u32]),
+            Some(&active),
+            self.params.max_sweeps.min(LOCAL_SWEEPS),
+        );
+        Some(part)
     }
 
     /// Whether to tighten the partition now (see [`Segmenter::checkpoint`]): while TOV is out
