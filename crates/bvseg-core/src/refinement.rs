@@ -47,7 +47,7 @@ use crate::{
 pub const TIGHTEN_PASSES: usize = 40;
 
 /// Of the tightening passes, how many judge every move (the others only those that gained).
-pub const TIGHTEN_FULL_PASSES: usize = 2;
+pub const TIGHTEN_FULL_PASSES: usize = 3;
 
 /// Passes of a tightening checkpoint during refinement (one of them full).
 pub const CHECKPOINT_PASSES: usize = 4;
