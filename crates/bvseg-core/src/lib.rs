@@ -24,8 +24,8 @@
 //! The pipeline, one module per stage: [`sampling`] -> [`moments`] -> [`initialization`] ->
 //! [`assignment`] / [`flooding`] -> [`optimization`] -> [`refinement`] (judged with
 //! [`fitting`]: [`bounding`] volumes of the [`enclosure`] points, measured by [`metrics`]) ->
-//! [`tightening`] -> [`hierarchy`]. [`Segmenter`] runs it step by step; [`segment`] runs it
-//! to the end.
+//! [`tightening`] -> [`reshaping`] -> [`hierarchy`]. [`Segmenter`] runs it step by step;
+//! [`segment`] runs it to the end.
 #![warn(missing_docs)]
 // Index loops over 3x3 matrices and parallel arrays read more clearly than iterator chains.
 #![allow(clippy::needless_range_loop)]
@@ -47,6 +47,7 @@ mod parallel;
 mod params;
 pub mod partition;
 pub mod refinement;
+pub mod reshaping;
 mod result;
 pub mod rng;
 pub mod sampling;

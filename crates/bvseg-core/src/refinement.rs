@@ -18,7 +18,8 @@
 //! 3. Merge: merge the pair (touching, or with overlapping volumes) whose merge lowers TOV
 //!    most, while one does and the tolerances stay met.
 //! 4. Final: the tightening ([`crate::tightening`]; in tolerance mode followed by
-//!    [`crate::tightening::relieve_worst`]), then the measured result and the hierarchy.
+//!    [`crate::tightening::relieve_worst`]), the ellipsoids reshaped to stick out less
+//!    ([`crate::reshaping`]), then the measured result and the hierarchy.
 //!
 //! Beyond the paper, which judges steps 2-3 with scaled Legendre ellipsoids, every step is
 //! judged with the output volumes themselves, fitted to the points the output must enclose
@@ -32,11 +33,12 @@ use std::sync::Arc;
 use crate::fitting::{Fit, Fitter};
 use crate::flooding::{connected_merges, solid_components};
 use crate::initialization::{cvt, split};
-use crate::metrics::outside_from_cells;
+use crate::metrics::{outside_from_cells, outside_volumes, relative};
 use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::parallel::{join, threads};
 use crate::partition::{Partition, Solid};
+use crate::reshaping::reshape;
 use crate::sampling::Grid;
 use crate::tightening::{relieve_worst, tighten, Coverage};
 use crate::{
@@ -535,11 +537,11 @@ impl Segmenter {
             cov.remove(&cur.fits[a].outside);
             cov.remove(&cur.fits[b].outside);
             cov.add(&fit.outside);
-            let tov = cov.union as f64 / total;
+            let tov = relative(cov.union, total);
             cov.remove(&fit.outside);
             cov.add(&cur.fits[a].outside);
             cov.add(&cur.fits[b].outside);
-            let ov = fit.outside.len() as f64 / m.n;
+            let ov = relative(fit.outside.len(), m.n);
             let mov = (0..cur.ov.len())
                 .filter(|&i| i != a && i != b)
                 .map(|i| cur.ov[i])
@@ -613,6 +615,23 @@ impl Segmenter {
         Some(self.accept(StepKind::Merge, s))
     }
 
+    /// `cur` with its ellipsoids reshaped to stick out less (see [`crate::reshaping`]), and
+    /// measured again.
+    fn reshaped(&self, cur: State) -> State {
+        let points: Vec<&[DVec3]> = cur.fits.iter().map(|f| f.hull.as_slice()).collect();
+        let min_r = 0.5 * self.solid.grid.h;
+        let volumes = reshape(&self.solid, &points, &cur.volumes, min_r);
+        let counts: Vec<f64> = cur.part.parts.iter().map(|m| m.n).collect();
+        let o = outside_volumes(&self.solid.grid, &volumes, &counts);
+        State {
+            volumes,
+            tov: o.tov,
+            mov: o.mov,
+            ov: o.ov,
+            ..cur
+        }
+    }
+
     fn finalize(&mut self) -> Step {
         let Some(cur) = self.state.take() else {
             self.phase = Phase::Done;
@@ -649,6 +668,11 @@ impl Segmenter {
                 );
             }
             self.evaluate(part)
+        } else {
+            cur
+        };
+        let cur = if self.params.polish {
+            self.reshaped(cur)
         } else {
             cur
         };

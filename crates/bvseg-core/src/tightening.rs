@@ -12,6 +12,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::fitting::{Fit, Fitter};
+use crate::metrics::{is_offset_cell, relative, OFFSET_TAG};
 use crate::moments::Moments;
 use crate::partition::{Partition, Solid};
 use crate::sampling::NONE;
@@ -24,21 +25,23 @@ const REACH: f64 = 1.15;
 /// A pass that lowers TOV by less than this ends the tightening.
 const MIN_PASS_GAIN: f64 = 1e-3;
 
-/// How many lattice cells outside the solid each cell is covered by, and how many are
-/// covered at all.
+/// How many volumes cover each lattice cell outside the solid (of both lattices, see
+/// [`crate::metrics`]), and how many such cells are covered at all.
 #[derive(Debug, Clone)]
 pub struct Coverage {
     lo: [i64; 3],
     n: [i64; 3],
     count: Vec<u16>,
+    count_offset: Vec<u16>,
     extra: HashMap<[i64; 3], u32>,
-    /// Number of covered cells (the union's outside volume in cells).
+    /// Number of covered cells of both lattices (`LATTICES` times the union's outside volume
+    /// in cells).
     pub union: usize,
 }
 
 impl Coverage {
-    /// An empty coverage over the solid's lattice with a margin of half its size around it
-    /// (cells beyond fall back to a hash map).
+    /// An empty coverage over the solid's lattices with a margin of half their size around
+    /// them (cells beyond fall back to a hash map).
     pub fn new(solid: &Solid) -> Self {
         let d = solid.grid.dims;
         let m = [
@@ -52,23 +55,47 @@ impl Coverage {
             d[1] as i64 + 2 * m[1],
             d[2] as i64 + 2 * m[2],
         ];
+        let len = (n[0] * n[1] * n[2]) as usize;
         Self {
             lo,
             n,
-            count: vec![0; (n[0] * n[1] * n[2]) as usize],
+            count: vec![0; len],
+            count_offset: vec![0; len],
             extra: HashMap::new(),
             union: 0,
         }
     }
 
+    /// Index of cell `c` (tagged or not) in its lattice's dense array, if it is in range.
+    #[inline]
+    fn index(&self, c: &[i64; 3]) -> Option<(bool, usize)> {
+        let offset = is_offset_cell(c);
+        let x = if offset { c[0] - OFFSET_TAG } else { c[0] };
+        let r = [x - self.lo[0], c[1] - self.lo[1], c[2] - self.lo[2]];
+        (0..3).all(|d| r[d] >= 0 && r[d] < self.n[d]).then(|| {
+            (
+                offset,
+                (r[0] + self.n[0] * (r[1] + self.n[1] * r[2])) as usize,
+            )
+        })
+    }
+
     #[inline]
     fn slot(&mut self, c: &[i64; 3]) -> Option<&mut u16> {
-        let r = [c[0] - self.lo[0], c[1] - self.lo[1], c[2] - self.lo[2]];
-        if (0..3).all(|d| r[d] >= 0 && r[d] < self.n[d]) {
-            let i = r[0] + self.n[0] * (r[1] + self.n[1] * r[2]);
-            Some(&mut self.count[i as usize])
+        let (offset, i) = self.index(c)?;
+        Some(if offset {
+            &mut self.count_offset[i]
         } else {
-            None
+            &mut self.count[i]
+        })
+    }
+
+    /// Whether cell `c` is covered at least once.
+    pub fn covered(&self, c: &[i64; 3]) -> bool {
+        match self.index(c) {
+            Some((true, i)) => self.count_offset[i] > 0,
+            Some((false, i)) => self.count[i] > 0,
+            None => self.extra.get(c).is_some_and(|&v| v > 0),
         }
     }
 
@@ -347,7 +374,7 @@ pub fn tighten(
         }
         fit_moves(mesh, solid, fitter, part, &cands, &fits);
         // Gains against the current state.
-        let ov = |f: &Fit, n: f64| f.outside.len() as f64 / n.max(1.0);
+        let ov = |f: &Fit, n: f64| relative(f.outside.len(), n);
         let mut scored: Vec<(i64, usize)> = Vec::new();
         for (i, mv) in cands.iter().enumerate() {
             let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
@@ -401,7 +428,7 @@ pub fn tighten(
         }
         moves += applied;
         // Stop when a pass gains less than MIN_PASS_GAIN of the solid's volume in TOV.
-        let gain = union_before.saturating_sub(cov.union) as f64 / solid.len() as f64;
+        let gain = relative(union_before.saturating_sub(cov.union), solid.len() as f64);
         if applied == 0 || gain < MIN_PASS_GAIN {
             if full || fulls == max_full {
                 break;
@@ -436,7 +463,7 @@ pub fn relieve_worst(
         let ov: Vec<f64> = fits
             .iter()
             .zip(&part.parts)
-            .map(|(f, m)| f.outside.len() as f64 / m.n.max(1.0))
+            .map(|(f, m)| relative(f.outside.len(), m.n))
             .collect();
         let Some(w) = (0..ov.len()).max_by(|&a, &b| ov[a].total_cmp(&ov[b]).then(b.cmp(&a))) else {
             break;
@@ -449,7 +476,7 @@ pub fn relieve_worst(
         for f in &fits {
             cov.add(&f.outside);
         }
-        let cur_tov = cov.union as f64 / total;
+        let cur_tov = relative(cov.union, total);
         // Layers between the worst part and each neighbour, both ways.
         let w32 = w as u32;
         let cands: Vec<Move> = layers(solid, part, |a, b| a == w32 || b == w32)
@@ -468,10 +495,10 @@ pub fn relieve_worst(
                 .map(|j| ov[j])
                 .fold(0.0f64, f64::max);
             let mov = others
-                .max(fa.outside.len() as f64 / mv.m_from.n)
-                .max(fb.outside.len() as f64 / mv.m_to.n);
+                .max(relative(fa.outside.len(), mv.m_from.n))
+                .max(relative(fb.outside.len(), mv.m_to.n));
             let old = [fits[a].outside.as_slice(), fits[b].outside.as_slice()];
-            let tov = cov.union_if(old, [&fa.outside, &fb.outside]) as f64 / total;
+            let tov = relative(cov.union_if(old, [&fa.outside, &fb.outside]), total);
             if mov < cur_mov && tov < cur_tov.max(tov_tol) && best.is_none_or(|x| mov < x.0) {
                 best = Some((mov, i));
             }

@@ -5,6 +5,13 @@
 //! `h`, so it carries weight `h^3` and the per-cell covariance `h^2/12 I`. Cells outside the
 //! mesh are implicit: any lattice cell that is not a sample is outside the solid, which is
 //! how the metrics measure outside volume.
+//!
+//! The grid also classifies the centres of a second lattice, offset by half a cell along
+//! every axis (the corners of the first one's cells). The output volumes are fitted to
+//! points on the first lattice (samples and the centres of shared cell faces), so their
+//! surfaces pass through its cell centres far more often than chance: counted there alone,
+//! the outside volume of boxes around thin slabs came out up to 20 % below an independent
+//! measurement. The metrics count both lattices (see [`crate::metrics`]).
 pub mod inside;
 mod shells;
 
@@ -32,6 +39,12 @@ pub struct Grid {
     pub points: Vec<DVec3>,
     /// For each sample, its face neighbours (-x, +x, -y, +y, -z, +z) that are samples, or [`NONE`].
     pub neighbors: Vec<[u32; 6]>,
+    /// Inside test of the offset lattice: cell `(i, j, k)` of it (index
+    /// `i + (nx + 1) * (j + (ny + 1) * k)`) has its centre at `origin + h (i + 1/2, j + 1/2,
+    /// k + 1/2)`, for `0 <= i <= nx` and so on.
+    pub offset_inside: Vec<bool>,
+    /// Number of cells of the offset lattice inside the solid.
+    pub offset_len: usize,
 }
 
 impl Grid {
@@ -82,27 +95,41 @@ impl Grid {
         let (origin, dims, h) = lattice_for_box(lo, hi, h, max_cells);
         let mut inside = inside::inside_cells(mesh, origin, h, dims);
         shells::mark_sub_cell_shells(mesh, origin, h, dims, &mut inside);
-        Ok(Self::from_mask(origin, h, dims, &inside))
+        let offset =
+            inside::inside_cells(mesh, origin + DVec3::splat(0.5 * h), h, offset_dims(dims));
+        Ok(Self::from_masks(origin, h, dims, &inside, offset))
     }
 
     /// Sample an implicit solid `inside(p)` over the box `[lo, hi]` with cell size `h`
     /// (for tests and analytic shapes).
     pub fn from_inside_fn(lo: DVec3, hi: DVec3, h: f64, inside: impl Fn(DVec3) -> bool) -> Self {
         let (origin, dims, h) = lattice_for_box(lo, hi, h, f64::INFINITY);
-        let mut mask = vec![false; dims[0] * dims[1] * dims[2]];
-        for k in 0..dims[2] {
-            for j in 0..dims[1] {
-                for i in 0..dims[0] {
-                    let p = origin + h * DVec3::new(i as f64, j as f64, k as f64);
-                    mask[i + dims[0] * (j + dims[1] * k)] = inside(p);
+        let mask_of = |origin: DVec3, dims: [usize; 3]| {
+            let mut mask = vec![false; dims[0] * dims[1] * dims[2]];
+            for k in 0..dims[2] {
+                for j in 0..dims[1] {
+                    for i in 0..dims[0] {
+                        let p = origin + h * DVec3::new(i as f64, j as f64, k as f64);
+                        mask[i + dims[0] * (j + dims[1] * k)] = inside(p);
+                    }
                 }
             }
-        }
-        Self::from_mask(origin, h, dims, &mask)
+            mask
+        };
+        let mask = mask_of(origin, dims);
+        let offset = mask_of(origin + DVec3::splat(0.5 * h), offset_dims(dims));
+        Self::from_masks(origin, h, dims, &mask, offset)
     }
 
-    /// Build the sample arrays from a per-cell inside mask.
-    pub fn from_mask(origin: DVec3, h: f64, dims: [usize; 3], mask: &[bool]) -> Self {
+    /// Build the sample arrays from a per-cell inside mask of the lattice and one of the
+    /// offset lattice (dimensions [`offset_dims`]).
+    fn from_masks(
+        origin: DVec3,
+        h: f64,
+        dims: [usize; 3],
+        mask: &[bool],
+        offset_inside: Vec<bool>,
+    ) -> Self {
         let [nx, ny, nz] = dims;
         let mut sample_of_cell = vec![NONE; nx * ny * nz];
         let mut coords = Vec::new();
@@ -127,6 +154,8 @@ impl Grid {
             coords,
             points,
             neighbors: Vec::new(),
+            offset_len: offset_inside.iter().filter(|&&b| b).count(),
+            offset_inside,
         };
         grid.neighbors = (0..grid.points.len())
             .map(|s| {
@@ -156,6 +185,17 @@ impl Grid {
         self.sample_of_cell[i as usize + nx * (j as usize + ny * k as usize)]
     }
 
+    /// Whether cell `(i, j, k)` of the offset lattice (centre `origin + h (i + 1/2, j + 1/2,
+    /// k + 1/2)`) is inside the solid; `false` beyond the grid's extent.
+    #[inline]
+    pub fn offset_inside_at(&self, i: i64, j: i64, k: i64) -> bool {
+        let [nx, ny, nz] = offset_dims(self.dims);
+        if i < 0 || j < 0 || k < 0 || i >= nx as i64 || j >= ny as i64 || k >= nz as i64 {
+            return false;
+        }
+        self.offset_inside[i as usize + nx * (j as usize + ny * k as usize)]
+    }
+
     /// Number of interior samples.
     pub fn len(&self) -> usize {
         self.points.len()
@@ -183,6 +223,12 @@ impl Grid {
     pub fn cell_center(&self, i: i64, j: i64, k: i64) -> DVec3 {
         self.origin + self.h * DVec3::new(i as f64, j as f64, k as f64)
     }
+}
+
+/// Dimensions of the offset lattice of a grid with dimensions `dims`: one more cell along each
+/// axis, so that its cells' centres straddle the grid's.
+pub fn offset_dims(dims: [usize; 3]) -> [usize; 3] {
+    [dims[0] + 1, dims[1] + 1, dims[2] + 1]
 }
 
 /// A lattice covering `[lo, hi]` with one empty cell of margin on every side. The cell size is

@@ -11,7 +11,7 @@ use crate::Mesh;
 /// For every closed shell of `mesh` (triangles connected through shared vertices, every
 /// directed edge matched by its reverse, non-zero volume) whose bounding box holds no
 /// inside cell centre, marks the cell nearest its centre as inside in `mask` (cells of the
-/// lattice `origin`, `h`, `dims`, as in `Grid::from_mask`).
+/// lattice `origin`, `h`, `dims`, indexed `i + nx * (j + ny * k)` as in [`super::Grid`]).
 pub(crate) fn mark_sub_cell_shells(
     mesh: &Mesh,
     origin: DVec3,
