@@ -20,7 +20,7 @@
 //! the first, so that one list holds a volume's outside cells of both lattices.
 use glam::DVec3;
 
-use crate::sampling::{Grid, NONE};
+use crate::sampling::{offset_dims, Grid, NONE};
 use crate::volume::{BoundingVolume, Shape};
 
 /// Outside-volume figures of a set of volumes.
@@ -88,28 +88,110 @@ pub fn relative(cells: usize, n: f64) -> f64 {
 }
 
 /// Call `f(i, j, k)` for every cell of the sampling lattice whose centre lies in `v`.
-pub fn for_each_cell(grid: &Grid, v: &BoundingVolume, f: impl FnMut(i64, i64, i64)) {
-    cells_in(grid.origin, grid.h, v, f)
+pub fn for_each_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(i64, i64, i64)) {
+    columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
+        for k in k0..=k1 {
+            f(i, j, k);
+        }
+        true
+    });
 }
 
 /// Call `f(cell)` for every cell of either lattice outside the solid whose centre lies in
 /// `v`; cells of the offset lattice are tagged with [`OFFSET_TAG`].
 pub fn for_each_outside_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut([i64; 3])) {
-    cells_in(grid.origin, grid.h, v, |i, j, k| {
-        if grid.sample_at(i, j, k) == NONE {
-            f([i, j, k]);
-        }
-    });
-    let origin = grid.origin + DVec3::splat(0.5 * grid.h);
-    cells_in(origin, grid.h, v, |i, j, k| {
-        if !grid.offset_inside_at(i, j, k) {
-            f([i + OFFSET_TAG, j, k]);
-        }
+    outside_cells_while(grid, v, |c| {
+        f(c);
+        true
     });
 }
 
-/// Call `f(i, j, k)` for every point `origin + h (i, j, k)` in `v`.
-fn cells_in(origin: DVec3, h: f64, v: &BoundingVolume, mut f: impl FnMut(i64, i64, i64)) {
+/// Like [`for_each_outside_cell`], stopping after the first column during which `f` returned
+/// `false`. Returns whether every cell was visited.
+pub fn outside_cells_while(
+    grid: &Grid,
+    v: &BoundingVolume,
+    mut f: impl FnMut([i64; 3]) -> bool,
+) -> bool {
+    let mut go = true;
+    let dims = grid.dims;
+    let done = columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
+        outside_in_column(
+            &grid.sample_of_cell,
+            dims,
+            i,
+            j,
+            k0,
+            k1,
+            |s| *s != NONE,
+            |k| {
+                go &= f([i, j, k]);
+            },
+        );
+        go
+    });
+    if !done {
+        return false;
+    }
+    let dims = offset_dims(grid.dims);
+    let origin = grid.origin + DVec3::splat(0.5 * grid.h);
+    columns_in(origin, grid.h, v, |i, j, k0, k1| {
+        outside_in_column(
+            &grid.offset_inside,
+            dims,
+            i,
+            j,
+            k0,
+            k1,
+            |&b| b,
+            |k| {
+                go &= f([i + OFFSET_TAG, j, k]);
+            },
+        );
+        go
+    })
+}
+
+/// Call `f(k)` for each `k` in `k0..=k1` whose cell `(i, j, k)` of a lattice with per-cell
+/// values `cells` (dimensions `dims`) is not `inside`; every cell beyond the lattice is.
+#[inline]
+fn outside_in_column<T>(
+    cells: &[T],
+    dims: [usize; 3],
+    i: i64,
+    j: i64,
+    k0: i64,
+    k1: i64,
+    inside: impl Fn(&T) -> bool,
+    mut f: impl FnMut(i64),
+) {
+    let [nx, ny, nz] = dims;
+    if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
+        (k0..=k1).for_each(f);
+        return;
+    }
+    // Below and above the lattice everything is outside; in it, one strided walk.
+    let (lo, hi) = (k0.max(0), k1.min(nz as i64 - 1));
+    (k0..lo.min(k1 + 1)).for_each(&mut f);
+    let stride = nx * ny;
+    let base = i as usize + nx * j as usize;
+    for k in lo..=hi {
+        if !inside(&cells[base + stride * k as usize]) {
+            f(k);
+        }
+    }
+    ((hi + 1).max(k0)..=k1).for_each(f);
+}
+
+/// Call `f(i, j, k0, k1)` for every column `(i, j)` of the lattice `origin + h (i, j, k)` that
+/// meets `v`, with the range `k0..=k1` of its points in `v`, until `f` returns `false`.
+/// Returns whether every column was visited.
+fn columns_in(
+    origin: DVec3,
+    h: f64,
+    v: &BoundingVolume,
+    mut f: impl FnMut(i64, i64, i64, i64) -> bool,
+) -> bool {
     let (lo, hi) = v.aabb();
     let to_l = |p: DVec3| (p - origin) / h;
     let (l0, l1) = (to_l(lo), to_l(hi));
@@ -130,12 +212,13 @@ fn cells_in(origin: DVec3, h: f64, v: &BoundingVolume, mut f: impl FnMut(i64, i6
                 // matching `BoundingVolume::contains`.
                 let k0 = (t0 - 1e-9).ceil() as i64;
                 let k1 = (t1 + 1e-9).floor() as i64;
-                for k in k0..=k1 {
-                    f(i, j, k);
+                if k0 <= k1 && !f(i, j, k0, k1) {
+                    return false;
                 }
             }
         }
     }
+    true
 }
 
 /// Cells of both lattices outside the solid whose centres `v` contains (see

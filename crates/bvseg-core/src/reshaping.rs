@@ -22,7 +22,7 @@
 //! per cent of TOV at k = 32, up to 16 % on the chair's bars and slabs (see BENCHMARKS.md).
 use glam::{DMat3, DQuat, DVec3};
 
-use crate::metrics::{for_each_outside_cell, outside_cells};
+use crate::metrics::{outside_cells, outside_cells_while};
 use crate::partition::Solid;
 use crate::tightening::Coverage;
 use crate::volume::{BoundingVolume, Shape};
@@ -63,19 +63,21 @@ pub fn reshape(
         let own_limit = cells[i].len();
         let cov_ref = &cov;
         // (outside cells no other volume covers, own outside cells), or None when the trial
-        // covers more outside cells of its own than the part's current volume.
-        let score = |v: &BoundingVolume| {
+        // covers more outside cells of its own than the part's current volume, or more than
+        // `bound` that no other volume covers (it cannot win then: stop counting early).
+        let score = |v: &BoundingVolume, bound: usize| {
             if v.radii.min_element() < MIN_SEMI_AXIS_CELLS * grid.h {
                 return None;
             }
             let (mut marginal, mut own) = (0usize, 0usize);
-            for_each_outside_cell(grid, v, |c| {
+            let complete = outside_cells_while(grid, v, |c| {
                 own += 1;
                 if !cov_ref.covered(&c) {
                     marginal += 1;
                 }
+                own <= own_limit && marginal <= bound
             });
-            (own <= own_limit).then_some((marginal, own))
+            complete.then_some((marginal, own))
         };
         let v = search(points[i], &volumes[i], min_r, score);
         cells[i] = outside_cells(grid, &v);
@@ -105,60 +107,57 @@ fn hold(points: &[DVec3], c: DVec3, axes: DMat3, radii: DVec3, min_r: f64) -> Bo
 
 /// Compass search from `start` (which holds `points`) for the ellipsoid holding `points`
 /// with the lowest `score`, compared lexicographically and then by volume (which must drop by
-/// a relative 1e-9 to count). A trial scored `None` is rejected.
+/// a relative 1e-9 to count). A trial scored `None` is rejected; `score` is told the best
+/// first entry so far, and may give up (`None`) on a trial that exceeds it. Each round scores the 18
+/// moves from the current best in parallel and takes the best of them (the first in move
+/// order on ties), so the result does not depend on the thread count.
 fn search(
     points: &[DVec3],
     start: &BoundingVolume,
     min_r: f64,
-    score: impl Fn(&BoundingVolume) -> Option<(usize, usize)>,
+    score: impl Fn(&BoundingVolume, usize) -> Option<(usize, usize)> + Sync + Send,
 ) -> BoundingVolume {
-    let Some(mut best_s) = score(start) else {
+    let Some(mut best_s) = score(start, usize::MAX) else {
         return *start;
     };
     let mut best = *start;
     let mut best_vol = best.volume();
-    if best_s.0 == 0 {
-        return best;
-    }
     let mean_r = (start.radii.x * start.radii.y * start.radii.z).cbrt();
     // Step sizes: centre (world units), log semi-axes, rotation angle (radians).
     let (mut dc, mut dr, mut da) = (0.25 * mean_r, 0.3f64, 0.2f64);
     let mut trials = 0usize;
-    'levels: for _ in 0..LEVELS {
-        loop {
-            let mut improved = false;
-            for dim in 0..9 {
-                for sign in [1.0, -1.0] {
-                    let (mut c, mut axes, mut radii) = (best.center, best.axes, best.radii);
-                    match dim {
-                        0..=2 => c += best.axes.col(dim) * (sign * dc),
-                        3..=5 => radii[dim - 3] *= (sign * dr).exp(),
-                        _ => {
-                            let q = DQuat::from_axis_angle(best.axes.col(dim - 6), sign * da);
-                            axes = DMat3::from_quat(q) * axes;
-                        }
-                    }
-                    let v = hold(points, c, axes, radii, min_r);
-                    trials += 1;
-                    if let Some(s) = score(&v) {
-                        let vol = v.volume();
-                        if s < best_s || (s == best_s && vol < best_vol * (1.0 - 1e-9)) {
-                            (best, best_s, best_vol) = (v, s, vol);
-                            improved = true;
-                        }
-                    }
-                    if trials >= MAX_TRIALS || best_s.0 == 0 {
-                        break 'levels;
-                    }
+    let mut level = 0;
+    let moves: Vec<(usize, f64)> = (0..9).flat_map(|d| [(d, 1.0), (d, -1.0)]).collect();
+    while level < LEVELS && trials < MAX_TRIALS && best_s.0 > 0 {
+        let from = best;
+        let trial = |&(dim, sign): &(usize, f64)| {
+            let (mut c, mut axes, mut radii) = (from.center, from.axes, from.radii);
+            match dim {
+                0..=2 => c += from.axes.col(dim) * (sign * dc),
+                3..=5 => radii[dim - 3] *= (sign * dr).exp(),
+                _ => {
+                    let q = DQuat::from_axis_angle(from.axes.col(dim - 6), sign * da);
+                    axes = DMat3::from_quat(q) * axes;
                 }
             }
-            if !improved {
-                break;
+            let v = hold(points, c, axes, radii, min_r);
+            score(&v, best_s.0).map(|s| (s, v.volume(), v))
+        };
+        let scored = crate::parallel::map(&moves, trial);
+        trials += moves.len();
+        let mut improved = false;
+        for (s, vol, v) in scored.into_iter().flatten() {
+            if s < best_s || (s == best_s && vol < best_vol * (1.0 - 1e-9)) {
+                (best, best_s, best_vol) = (v, s, vol);
+                improved = true;
             }
         }
-        dc *= 0.5;
-        dr *= 0.5;
-        da *= 0.5;
+        if !improved {
+            level += 1;
+            dc *= 0.5;
+            dr *= 0.5;
+            da *= 0.5;
+        }
     }
     best
 }
