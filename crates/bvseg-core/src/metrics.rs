@@ -117,12 +117,9 @@ pub fn outside_cells_while(
     let dims = grid.dims;
     let done = columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
         outside_in_column(
-            &grid.sample_of_cell,
-            dims,
-            i,
-            j,
-            k0,
-            k1,
+            (&grid.sample_of_cell, dims),
+            [i, j],
+            [k0, k1],
             |s| *s != NONE,
             |k| {
                 go &= f([i, j, k]);
@@ -137,12 +134,9 @@ pub fn outside_cells_while(
     let origin = grid.origin + DVec3::splat(0.5 * grid.h);
     columns_in(origin, grid.h, v, |i, j, k0, k1| {
         outside_in_column(
-            &grid.offset_inside,
-            dims,
-            i,
-            j,
-            k0,
-            k1,
+            (&grid.offset_inside, dims),
+            [i, j],
+            [k0, k1],
             |&b| b,
             |k| {
                 go &= f([i + OFFSET_TAG, j, k]);
@@ -156,12 +150,9 @@ pub fn outside_cells_while(
 /// values `cells` (dimensions `dims`) is not `inside`; every cell beyond the lattice is.
 #[inline]
 fn outside_in_column<T>(
-    cells: &[T],
-    dims: [usize; 3],
-    i: i64,
-    j: i64,
-    k0: i64,
-    k1: i64,
+    (cells, dims): (&[T], [usize; 3]),
+    [i, j]: [i64; 2],
+    [k0, k1]: [i64; 2],
     inside: impl Fn(&T) -> bool,
     mut f: impl FnMut(i64),
 ) {
