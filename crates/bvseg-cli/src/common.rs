@@ -80,7 +80,7 @@ pub struct ParamArgs {
     #[arg(long)]
     pub no_merge: bool,
 
-    /// Do not polish part boundaries to lower the outside volume.
+    /// Do not polish part boundaries nor reshape the ellipsoids to lower the outside volume.
     #[arg(long)]
     pub no_polish: bool,
 

@@ -111,12 +111,12 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::from(EXIT_TOLERANCE));
         }
         if !args.quiet {
-            // Parts ending in a flat or thin feature keep MOV up whatever the number of parts
-            // (README, "What MOV can reach"): more parts only help TOV.
+            // Parts ending in a flat end or a pointed tip keep MOV up whatever the number of
+            // parts (README, "What MOV can reach"): more parts only help TOV.
             let hint = if m.tov >= params.tov {
                 "raise --max-k or --tov, or try --bv mixed"
             } else {
-                "flat or thin features keep MOV up whatever k (README, \"What MOV can reach\"); \
+                "flat ends and pointed tips keep MOV up whatever k (README, \"What MOV can reach\"); \
                  raise --mov or try --bv mixed"
             };
             eprintln!(

@@ -46,7 +46,9 @@ pub struct Params {
     /// Merge adjacent parts at the end of the tolerance loop while that lowers TOV.
     pub merge: bool,
     /// Beyond the paper: after optimising F, move boundary layers between neighbouring parts
-    /// while that lowers the outside volume of the union of their bounding volumes.
+    /// while that lowers the outside volume of the union of their bounding volumes
+    /// ([`crate::tightening`]), then reshape the output ellipsoids to stick out of the solid
+    /// less ([`crate::reshaping`]).
     pub polish: bool,
     /// Upper bound on Lloyd sweeps per optimisation.
     pub max_sweeps: usize,
