@@ -61,8 +61,14 @@ pub const RELIEVE_STEPS: usize = 40;
 /// refinement stops.
 pub const MOV_PATIENCE: usize = 6;
 
-/// A tightening checkpoint is due when TOV is within this factor of its tolerance...
+/// A tightening checkpoint is due when TOV is within this factor of its tolerance (or,
+/// whatever TOV, once k has reached [`CHECKPOINT_LATE`] of the part limit)...
 pub const CHECKPOINT_NEAR: f64 = 1.3;
+
+/// Share of `max_k` from which checkpoints run whatever TOV: on limb-like models (human_1,
+/// dinosaur_1) splits stall far from the tolerance, and a checkpoint there gains more than the
+/// splits left before the limit (auto mode, ellipsoids: TOV 0.324 -> 0.307 and 0.331 -> 0.314).
+pub const CHECKPOINT_LATE: f64 = 0.6;
 
 /// ... and the last this many splits ...
 pub const CHECKPOINT_STALL: usize = 4;
@@ -441,11 +447,13 @@ impl Segmenter {
     }
 
     /// Whether to tighten the partition now (see [`Segmenter::checkpoint`]): while TOV is out
-    /// of tolerance but within [`CHECKPOINT_NEAR`] times it, and the last
-    /// [`CHECKPOINT_STALL`] splits lowered it by less than [`CHECKPOINT_GAIN`] (relative).
+    /// of tolerance but within [`CHECKPOINT_NEAR`] times it (or k is past [`CHECKPOINT_LATE`]
+    /// of `max_k`), and the last [`CHECKPOINT_STALL`] splits lowered it by less than
+    /// [`CHECKPOINT_GAIN`] (relative).
     fn checkpoint_due(&self, cur: &State) -> bool {
         let tol = self.params.tov;
-        if !self.params.polish || cur.tov < tol || cur.tov >= CHECKPOINT_NEAR * tol {
+        let late = cur.part.k() as f64 >= CHECKPOINT_LATE * self.params.max_k as f64;
+        if !self.params.polish || cur.tov < tol || (cur.tov >= CHECKPOINT_NEAR * tol && !late) {
             return false;
         }
         let kept: Vec<&Step> = self
