@@ -628,8 +628,8 @@ impl Segmenter {
     fn reshaped(&self, cur: State) -> State {
         let points: Vec<&[DVec3]> = cur.fits.iter().map(|f| f.hull.as_slice()).collect();
         let min_r = 0.5 * self.solid.grid.h;
-        let volumes = reshape(&self.solid, &points, &cur.volumes, min_r);
         let counts: Vec<f64> = cur.part.parts.iter().map(|m| m.n).collect();
+        let volumes = reshape(&self.solid, &points, &cur.volumes, &counts, min_r);
         let o = outside_volumes(&self.solid.grid, &volumes, &counts);
         State {
             volumes,

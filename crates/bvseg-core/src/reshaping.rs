@@ -11,9 +11,9 @@
 //!
 //! So after the tightening, each output ellipsoid in turn is reshaped to add as few lattice
 //! cells outside the solid to the union of all the other volumes as it can, while it still
-//! holds every enclosure point of its part (so the union still bounds the object) and covers
-//! no more outside cells of its own than before (so no part's OV, and neither TOV nor MOV,
-//! can rise). The search is a compass search over the centre, the log semi-axes and the
+//! holds every enclosure point of its part (so the union still bounds the object) and its
+//! part's OV stays at most the larger of its own and MOV (so neither TOV nor MOV can rise; a
+//! part's OV can, up to MOV, when its volume reaches into space other volumes already cover). The search is a compass search over the centre, the log semi-axes and the
 //! orientation, each trial scaled about its centre to hold the points exactly; it starts from
 //! the minimum-volume ellipsoid and accepts only strict improvements. Volumes are visited in
 //! index order, so the result does not depend on the thread count.
@@ -22,7 +22,7 @@
 //! per cent of TOV at k = 32, up to 16 % on the chair's bars and slabs (see BENCHMARKS.md).
 use glam::{DMat3, DQuat, DVec3};
 
-use crate::metrics::{outside_cells, outside_cells_while};
+use crate::metrics::{outside_cells, outside_cells_while, relative, LATTICES};
 use crate::partition::Solid;
 use crate::tightening::Coverage;
 use crate::volume::{BoundingVolume, Shape};
@@ -39,16 +39,23 @@ const MAX_TRIALS: usize = 600;
 const MIN_SEMI_AXIS_CELLS: f64 = 1.5;
 
 /// Reshape the ellipsoids among `volumes` (boxes are kept as they are). `points[i]` are the
-/// points volume `i` must hold (its part's enclosure or convex-hull points); `min_r` is the
-/// smallest semi-axis allowed. Returns the new volumes, in the same order.
+/// points volume `i` must hold (its part's enclosure or convex-hull points), `counts[i]` the
+/// number of samples in its part; `min_r` is the smallest semi-axis allowed. Returns the new
+/// volumes, in the same order.
 pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
     volumes: &[BoundingVolume],
+    counts: &[f64],
     min_r: f64,
 ) -> Vec<BoundingVolume> {
     let grid = &solid.grid;
     let mut cells: Vec<Vec<[i64; 3]>> = volumes.iter().map(|v| outside_cells(grid, v)).collect();
+    let mov = cells
+        .iter()
+        .zip(counts)
+        .map(|(c, &n)| relative(c.len(), n))
+        .fold(0.0, f64::max);
     let mut cov = Coverage::new(solid);
     for c in &cells {
         cov.add(c);
@@ -60,11 +67,14 @@ pub fn reshape(
             continue;
         }
         cov.remove(&cells[i]);
-        let own_limit = cells[i].len();
+        // A part's OV may rise, but not past the largest OV (so MOV cannot rise either).
+        let own_limit = cells[i]
+            .len()
+            .max((mov * LATTICES * counts[i]).floor() as usize);
         let cov_ref = &cov;
         // (outside cells no other volume covers, own outside cells), or None when the trial
-        // covers more outside cells of its own than the part's current volume, or more than
-        // `bound` that no other volume covers (it cannot win then: stop counting early).
+        // covers more outside cells of its own than `own_limit`, or more than `bound` that no
+        // other volume covers (it cannot win then: stop counting early).
         let score = |v: &BoundingVolume, bound: usize| {
             if v.radii.min_element() < MIN_SEMI_AXIS_CELLS * grid.h {
                 return None;
@@ -197,7 +207,7 @@ mod tests {
         let hull = crate::bounding::hull::hull_points(&pts);
         let mvee = crate::bounding::mvee::mvee_of_hull(&hull, 1e-4, 0.5);
         let before = outside_volumes(g, &[mvee], &[n]).ov[0];
-        let after_v = reshape(&solid, &[&hull], &[mvee], 0.5)[0];
+        let after_v = reshape(&solid, &[&hull], &[mvee], &[n], 0.5)[0];
         let after = outside_volumes(g, &[after_v], &[n]).ov[0];
         // The minimum-volume ellipsoid bulges by about 1/3 (more on the lattice); the reshaped
         // one reaches along the cylinder and bulges far less.
@@ -210,7 +220,7 @@ mod tests {
     }
 
     #[test]
-    fn never_raises_any_ov_or_tov() {
+    fn never_raises_tov_or_mov() {
         // Two overlapping pieces of a bent solid: an L of two bars.
         let solid = Solid::new(Grid::from_inside_fn(
             DVec3::splat(-1.0),
@@ -234,9 +244,11 @@ mod tests {
         let vb = crate::bounding::mvee::mvee_of_hull(&hb, 1e-4, 0.5);
         let counts = [a.len() as f64, b.len() as f64];
         let before = outside_volumes(g, &[va, vb], &counts);
-        let new = reshape(&solid, &[&ha, &hb], &[va, vb], 0.5);
+        let new = reshape(&solid, &[&ha, &hb], &[va, vb], &counts, 0.5);
         let after = outside_volumes(g, &new, &counts);
-        assert!(after.tov <= before.tov, "{} -> {}", before.tov, after.tov);
+        // The bars' volumes can reach along them into each other's space (measured: TOV
+        // 0.736 -> 0.707).
+        assert!(after.tov < before.tov, "{} -> {}", before.tov, after.tov);
         for i in 0..2 {
             assert!(
                 after.ov[i] <= before.ov[i],
