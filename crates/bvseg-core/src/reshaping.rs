@@ -50,7 +50,7 @@ pub fn reshape(
     min_r: f64,
 ) -> Vec<BoundingVolume> {
     let grid = &solid.grid;
-    let mut cells: Vec<Vec<[i64; 3]>> = volumes.iter().map(|v| outside_cells(grid, v)).collect();
+    let mut cells: Vec<Vec<[i64; 3]>> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
     let mov = cells
         .iter()
         .zip(counts)
