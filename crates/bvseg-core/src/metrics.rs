@@ -215,10 +215,7 @@ fn columns_in(
 /// Cells of both lattices outside the solid whose centres `v` contains (see
 /// [`for_each_outside_cell`]).
 pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<[i64; 3]> {
-    // Room for the cells of one lattice in the volume: about as many as both lattices' outside
-    // cells for a typical part, so the list rarely grows.
-    let cells = v.volume() / grid.cell_volume();
-    let mut out = Vec::with_capacity(cells.clamp(16.0, 1e6) as usize);
+    let mut out = Vec::new();
     for_each_outside_cell(grid, v, |c| out.push(c));
     out
 }
