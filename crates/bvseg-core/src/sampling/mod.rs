@@ -43,8 +43,6 @@ pub struct Grid {
     /// `i + (nx + 1) * (j + (ny + 1) * k)`) has its centre at `origin + h (i + 1/2, j + 1/2,
     /// k + 1/2)`, for `0 <= i <= nx` and so on.
     pub offset_inside: Vec<bool>,
-    /// Number of cells of the offset lattice inside the solid.
-    pub offset_len: usize,
 }
 
 impl Grid {
@@ -154,7 +152,6 @@ impl Grid {
             coords,
             points,
             neighbors: Vec::new(),
-            offset_len: offset_inside.iter().filter(|&&b| b).count(),
             offset_inside,
         };
         grid.neighbors = (0..grid.points.len())
