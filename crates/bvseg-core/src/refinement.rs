@@ -33,7 +33,7 @@ use std::sync::Arc;
 use crate::fitting::{Fit, Fitter};
 use crate::flooding::{connected_merges, solid_components};
 use crate::initialization::{cvt, split};
-use crate::metrics::{outside_from_cells, outside_volumes, relative};
+use crate::metrics::{outside_from_cells, relative};
 use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::parallel::{join, threads};
@@ -630,8 +630,10 @@ impl Segmenter {
         let points: Vec<&[DVec3]> = cur.fits.iter().map(|f| f.hull.as_slice()).collect();
         let min_r = 0.5 * self.solid.grid.h;
         let counts: Vec<f64> = cur.part.parts.iter().map(|m| m.n).collect();
-        let volumes = reshape(&self.solid, &points, &cur.volumes, &counts, min_r);
-        let o = outside_volumes(&self.solid.grid, &volumes, &counts);
+        let cells = cur.fits.iter().map(|f| f.outside.clone()).collect();
+        let (volumes, cells) = reshape(&self.solid, &points, &cur.volumes, cells, &counts, min_r);
+        let cells: Vec<&[[i64; 3]]> = cells.iter().map(Vec::as_slice).collect();
+        let o = outside_from_cells(&cells, &counts);
         State {
             volumes,
             tov: o.tov,

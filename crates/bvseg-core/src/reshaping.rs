@@ -39,18 +39,19 @@ const MAX_TRIALS: usize = 600;
 const MIN_SEMI_AXIS_CELLS: f64 = 1.5;
 
 /// Reshape the ellipsoids among `volumes` (boxes are kept as they are). `points[i]` are the
-/// points volume `i` must hold (its part's enclosure or convex-hull points), `counts[i]` the
-/// number of samples in its part; `min_r` is the smallest semi-axis allowed. Returns the new
-/// volumes, in the same order.
+/// points volume `i` must hold (its part's enclosure or convex-hull points), `cells[i]` its
+/// outside cells (see [`outside_cells`]), `counts[i]` the number of samples in its part;
+/// `min_r` is the smallest semi-axis allowed. Returns the new volumes and their outside
+/// cells, in the same order.
 pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
     volumes: &[BoundingVolume],
+    mut cells: Vec<Vec<[i64; 3]>>,
     counts: &[f64],
     min_r: f64,
-) -> Vec<BoundingVolume> {
+) -> (Vec<BoundingVolume>, Vec<Vec<[i64; 3]>>) {
     let grid = &solid.grid;
-    let mut cells: Vec<Vec<[i64; 3]>> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
     let mov = cells
         .iter()
         .zip(counts)
@@ -94,7 +95,7 @@ pub fn reshape(
         cov.add(&cells[i]);
         out[i] = v;
     }
-    out
+    (out, cells)
 }
 
 /// The ellipsoid with centre `c`, frame `axes` and semi-axes proportional to `radii`, scaled
@@ -207,7 +208,8 @@ mod tests {
         let hull = crate::bounding::hull::hull_points(&pts);
         let mvee = crate::bounding::mvee::mvee_of_hull(&hull, 1e-4, 0.5);
         let before = outside_volumes(g, &[mvee], &[n]).ov[0];
-        let after_v = reshape(&solid, &[&hull], &[mvee], &[n], 0.5)[0];
+        let cells = vec![outside_cells(g, &mvee)];
+        let after_v = reshape(&solid, &[&hull], &[mvee], cells, &[n], 0.5).0[0];
         let after = outside_volumes(g, &[after_v], &[n]).ov[0];
         // The minimum-volume ellipsoid bulges by about 1/3 (more on the lattice); the reshaped
         // one reaches along the cylinder and bulges far less.
@@ -244,7 +246,8 @@ mod tests {
         let vb = crate::bounding::mvee::mvee_of_hull(&hb, 1e-4, 0.5);
         let counts = [a.len() as f64, b.len() as f64];
         let before = outside_volumes(g, &[va, vb], &counts);
-        let new = reshape(&solid, &[&ha, &hb], &[va, vb], &counts, 0.5);
+        let cells = vec![outside_cells(g, &va), outside_cells(g, &vb)];
+        let (new, _) = reshape(&solid, &[&ha, &hb], &[va, vb], cells, &counts, 0.5);
         let after = outside_volumes(g, &new, &counts);
         // The bars' volumes can reach along them into each other's space (measured: TOV
         // 0.736 -> 0.707).
