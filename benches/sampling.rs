@@ -94,7 +94,7 @@ fn bench(c: &mut Criterion) {
             grid.dims
         );
         c.bench_function(&format!("inside_cells_50k_tris_{target}_samples"), |b| {
-            b.iter(|| inside_cells(black_box(&mesh), grid.origin, grid.h, grid.dims))
+            b.iter(|| inside_cells(black_box(&mesh), grid.origin, grid.h, grid.dims).unwrap())
         });
     }
 }

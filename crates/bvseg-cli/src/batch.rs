@@ -220,8 +220,19 @@ fn process(
 ) -> anyhow::Result<Row> {
     let (name, loaded) = common::load_solid(Some(path), &args.input, true)?;
     // One file's steps would interleave with the others': no per-step display here.
-    let seg =
-        common::run_segmentation(&name, &loaded.mesh, params, None, &Progress::Quiet, |_| {})?;
+    let deadline = common::Deadline {
+        seconds: args.params.timeout,
+        exit_when_stuck: false,
+    };
+    let seg = common::run_segmentation(
+        &name,
+        &loaded.mesh,
+        params,
+        None,
+        deadline,
+        &Progress::Quiet,
+        |_| {},
+    )?;
     for o in outs {
         write_output(o, &seg, &ExportOptions::default())?;
     }

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
-use bvseg_core::{BoundingKind, Mesh, Params, Segmentation, Segmenter, Step};
+use bvseg_core::{BoundingKind, Cancel, Mesh, Params, Segmentation, Segmenter, Step};
 use bvseg_io::{LoadOptions, LoadedMesh};
 use clap::{Args, ValueEnum};
 
@@ -87,6 +87,24 @@ pub struct ParamArgs {
     /// Exit with code 3 when the tolerances are not met within --max-k.
     #[arg(long)]
     pub strict: bool,
+
+    /// Grow every volume outward by D (mesh units), so that engines that store the volumes or
+    /// the mesh in f32 keep the enclosure (see the docs: about 1e-6 of the largest coordinate).
+    #[arg(long, value_name = "D", default_value_t = Params::default().margin)]
+    pub margin: f64,
+
+    /// Give up after this many seconds of segmentation: exit 2, write nothing.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
+    pub timeout: Option<f64>,
+}
+
+/// A positive number of seconds, at most a year.
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= 3.2e7 => Ok(t),
+        Ok(_) => Err("must be a number of seconds above 0 (and at most a year)".into()),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,6 +144,7 @@ impl ParamArgs {
             max_k: self.max_k,
             merge: !self.no_merge,
             polish: !self.no_polish,
+            margin: self.margin,
             ..Params::default()
         };
         params.validate()?;
@@ -200,28 +219,84 @@ pub fn load_solid(
     Ok((name, loaded))
 }
 
-/// Runs the segmentation with progress display, in a pool of `threads` when given.
+/// When and how a run gives up.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Deadline {
+    /// Seconds the run may take (`--timeout`).
+    pub seconds: Option<f64>,
+    /// Whether to end the whole process if the run does not stop soon after its time is up
+    /// (one run per process: `segment`; not `batch`, whose other files go on).
+    pub exit_when_stuck: bool,
+}
+
+/// Runs the segmentation with progress display, in a pool of `threads` when given, giving
+/// up at the deadline.
 pub fn run_segmentation(
     name: &str,
     mesh: &Mesh,
     params: &Params,
     threads: Option<u64>,
+    deadline: Deadline,
     progress: &Progress,
     on_step: impl FnMut(&Step) + Send,
 ) -> anyhow::Result<Segmentation> {
+    let cancel = Cancel::new();
+    let timeout = deadline.seconds;
+    let timer = timeout.map(|t| Timer::start(t, name, cancel.clone(), deadline.exit_when_stuck));
+    let failed = |e: bvseg_core::Error| match (e, timeout) {
+        (bvseg_core::Error::Cancelled, Some(t)) => {
+            anyhow!("{name}: gave up after {t} s (--timeout); nothing written")
+        }
+        (e, _) => anyhow!("{name}: {e}"),
+    };
     let work = || -> anyhow::Result<Segmentation> {
         let mut on_step = on_step;
         progress.sampling();
-        let mut seg = Segmenter::new(mesh, params).map_err(|e| anyhow!("{name}: {e}"))?;
+        let mut seg = Segmenter::with_cancel(mesh, params, cancel.clone()).map_err(failed)?;
         progress.refining(params);
         while let Some(step) = seg.step() {
             progress.step(&step);
             on_step(&step);
         }
         progress.done();
-        Ok(seg.finish())
+        seg.finish().map_err(failed)
     };
-    in_pool(threads, work)
+    let result = in_pool(threads, work);
+    drop(timer);
+    result
+}
+
+/// Sets a [`Cancel`] flag when its time is up, unless dropped first. The run checks the flag
+/// between bounded pieces of work; should one of them still be running a few seconds later,
+/// the timer ends the process itself (exit code 2, nothing written: outputs are written
+/// after the run, and the timer is dropped before).
+struct Timer {
+    _disarm: std::sync::mpsc::Sender<()>,
+}
+
+/// How long the timer waits for the run to notice the flag before ending the process.
+const TIMEOUT_GRACE: std::time::Duration = std::time::Duration::from_secs(3);
+
+impl Timer {
+    fn start(seconds: f64, name: &str, cancel: Cancel, exit_when_stuck: bool) -> Self {
+        let (tx, rx) = std::sync::mpsc::channel::<()>();
+        let name = name.to_owned();
+        let limit = std::time::Duration::from_secs_f64(seconds);
+        std::thread::spawn(move || {
+            use std::sync::mpsc::RecvTimeoutError::Timeout;
+            if rx.recv_timeout(limit) != Err(Timeout) {
+                return;
+            }
+            cancel.cancel();
+            if exit_when_stuck && rx.recv_timeout(TIMEOUT_GRACE) == Err(Timeout) {
+                eprintln!(
+                    "bvseg: error: {name}: gave up after {seconds} s (--timeout); nothing written"
+                );
+                std::process::exit(2);
+            }
+        });
+        Self { _disarm: tx }
+    }
 }
 
 #[cfg(feature = "parallel")]

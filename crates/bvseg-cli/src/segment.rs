@@ -54,12 +54,16 @@ pub struct SegmentArgs {
     pub quiet: bool,
 }
 
+/// Said when the run's bound on work cut it short.
+pub const BUDGET_WARNING: &str = "refinement stopped early: the volumes cover far more empty \
+    space than their parts (many pieces scattered over a large box?); they still enclose the mesh";
+
 pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     let params = args.params.params()?;
     check_outputs(args)?;
 
     let (name, loaded) = common::load_solid(args.mesh.as_deref(), &args.input, args.quiet)?;
-    let warnings = loaded.warnings();
+    let mut warnings = loaded.warnings();
     if !args.quiet {
         for w in &warnings {
             eprintln!("bvseg: warning: {name}: {w}");
@@ -69,9 +73,26 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
 
     let start = Instant::now();
     let progress = Progress::new(args.quiet);
-    let seg =
-        common::run_segmentation(&name, mesh, &params, args.params.threads, &progress, |_| {})?;
+    let seg = common::run_segmentation(
+        &name,
+        mesh,
+        &params,
+        args.params.threads,
+        common::Deadline {
+            seconds: args.params.timeout,
+            exit_when_stuck: true,
+        },
+        &progress,
+        |_| {},
+    )?;
     let seconds = start.elapsed().as_secs_f64();
+    if seg.budget_exhausted {
+        let w = BUDGET_WARNING.to_owned();
+        if !args.quiet {
+            eprintln!("bvseg: warning: {name}: {w}");
+        }
+        warnings.push(w);
+    }
 
     let options = ExportOptions {
         mesh: args.with_mesh.then_some(mesh),

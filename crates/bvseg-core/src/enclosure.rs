@@ -11,9 +11,13 @@
 //!    two parts' hulls meet on the shared faces instead of leaving the slab open.
 use glam::DVec3;
 
+use crate::bounding::hull::hull_points;
 use crate::partition::Solid;
 use crate::sampling::NONE;
 use crate::Mesh;
+
+/// Above this many distinct corners, a sample keeps only those on their convex hull.
+const MANY_CORNERS: usize = 64;
 
 /// For every lattice cell, the sample nearest to it along grid paths (a multi-source BFS
 /// from all samples), or [`NONE`] if the grid has no sample.
@@ -65,9 +69,10 @@ fn nearest_sample_field(solid: &Solid) -> Vec<u32> {
 pub struct Enclosure {
     /// For each triangle, its nearest sample.
     pub triangle_sample: Vec<u32>,
-    /// CSR lists of the triangles whose nearest sample is each sample.
+    /// CSR lists of the distinct corners of the triangles whose nearest sample is each
+    /// sample, sorted. Distinct, so that a file that repeats faces costs the fits nothing.
     offsets: Vec<u32>,
-    triangles: Vec<u32>,
+    corners: Vec<u32>,
 }
 
 impl Enclosure {
@@ -75,23 +80,59 @@ impl Enclosure {
     pub fn new(mesh: &Mesh, solid: &Solid) -> Self {
         let triangle_sample = nearest_samples(mesh, solid);
         let n = solid.len();
-        let mut offsets = vec![0u32; n + 1];
+        let mut start = vec![0usize; n + 1];
         for &s in &triangle_sample {
-            offsets[s as usize + 1] += 1;
+            start[s as usize + 1] += 3;
         }
         for i in 0..n {
-            offsets[i + 1] += offsets[i];
+            start[i + 1] += start[i];
         }
-        let mut fill = offsets.clone();
-        let mut triangles = vec![0u32; triangle_sample.len()];
+        let mut fill = start.clone();
+        let mut all = vec![0u32; start[n]];
         for (t, &s) in triangle_sample.iter().enumerate() {
-            triangles[fill[s as usize] as usize] = t as u32;
-            fill[s as usize] += 1;
+            let at = fill[s as usize];
+            all[at..at + 3].copy_from_slice(&mesh.triangles()[t]);
+            fill[s as usize] += 3;
+        }
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0u32);
+        let mut corners = Vec::with_capacity(all.len());
+        for s in 0..n {
+            let list = &mut all[start[s]..start[s + 1]];
+            list.sort_unstable();
+            let from = corners.len();
+            corners.extend(
+                list.iter()
+                    .enumerate()
+                    .filter(|&(i, &v)| i == 0 || list[i - 1] != v)
+                    .map(|(_, &v)| v),
+            );
+            if corners.len() - from > MANY_CORNERS {
+                // Only the corners on their own hull can be on the part's: the hull of a
+                // union is the hull of the members' hulls. Most samples have a handful of
+                // corners; a mesh far finer than the lattice, or one of stacked layers,
+                // has hundreds, which every fit of the part would otherwise take in.
+                let own = &corners[from..];
+                let pts: Vec<DVec3> = own.iter().map(|&v| mesh.vertices()[v as usize]).collect();
+                let hull = hull_points(&pts);
+                // The hull's vertices come in input order: a subsequence of `own`.
+                let mut next = hull.iter().peekable();
+                let kept: Vec<u32> = own
+                    .iter()
+                    .zip(&pts)
+                    .filter(|&(_, p)| next.next_if(|h| *h == p).is_some())
+                    .map(|(&v, _)| v)
+                    .collect();
+                corners.truncate(from);
+                corners.extend_from_slice(&kept);
+            }
+            // At most 3 x the triangles, which are u32-indexed.
+            offsets.push(corners.len() as u32);
         }
         Self {
             triangle_sample,
             offsets,
-            triangles,
+            corners,
         }
     }
 
@@ -103,9 +144,9 @@ impl Enclosure {
             .collect()
     }
 
-    /// The triangles whose nearest sample is `s`.
-    pub fn triangles_of(&self, s: usize) -> &[u32] {
-        &self.triangles[self.offsets[s] as usize..self.offsets[s + 1] as usize]
+    /// The distinct corners, sorted, of the triangles whose nearest sample is `s`.
+    pub fn corners_of(&self, s: usize) -> &[u32] {
+        &self.corners[self.offsets[s] as usize..self.offsets[s + 1] as usize]
     }
 
     /// The world-space points that part `label` (with samples `members`) must enclose, less
@@ -176,10 +217,9 @@ impl Enclosure {
             if !interior {
                 lat.push(c);
             }
-            for &t in self.triangles_of(s) {
-                verts.extend_from_slice(&mesh.triangles()[t as usize]);
-            }
+            verts.extend_from_slice(self.corners_of(s));
         }
+        crate::work::add(members.len() + verts.len());
         sort_dedup(&mut verts, mesh.vertices().len());
         let lat = extreme_on_lines(&lat);
         let mut pts = Vec::with_capacity(lat.len() + verts.len());

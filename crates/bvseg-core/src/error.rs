@@ -26,6 +26,16 @@ pub enum Error {
     /// The mesh is flat or encloses no volume that the sampling grid can see.
     #[error("the mesh encloses no volume (flat, open or degenerate): {0}")]
     NoVolume(String),
+    /// The surface is far more complex than the sampling lattice can resolve in bounded
+    /// time (typically a hostile file: many huge overlapping triangles).
+    #[error("the mesh is too complex to sample: {0}")]
+    TooComplex(String),
+    /// A broken invariant inside bvseg (a bug): please report it with the input.
+    #[error("internal error (please report it with the input): {0}")]
+    Internal(String),
+    /// The run was stopped through its [`crate::Cancel`] flag.
+    #[error("the run was cancelled")]
+    Cancelled,
     /// A parameter is out of its valid range.
     #[error("invalid parameter: {0}")]
     InvalidParams(String),

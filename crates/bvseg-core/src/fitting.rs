@@ -5,6 +5,7 @@
 //! sums, see [`crate::partition`]). The refinement and the tightening try many partitions
 //! that differ in a few parts; the cache makes each try cost only the parts it changed.
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -16,7 +17,7 @@ use crate::enclosure::Enclosure;
 use crate::metrics::outside_cells;
 use crate::moments::Moments;
 use crate::partition::Solid;
-use crate::{BoundingKind, BoundingVolume, Mesh};
+use crate::{BoundingKind, BoundingVolume, Cancel, Mesh};
 
 /// Tolerance of the ellipsoid fit (relative volume excess over the optimum).
 pub const MVEE_TOL: f64 = 1e-4;
@@ -52,12 +53,17 @@ pub fn fit_key(m: &Moments) -> FitKey {
     ]
 }
 
-/// Fits volumes of one kind to parts of one solid, with a cache.
+/// Fits volumes of one kind to parts of one solid, with a cache. It also keeps the run's
+/// account: the outside cells its fits have counted, against a bound (see
+/// [`Fitter::exhausted`]), and the run's [`Cancel`] flag.
 #[derive(Debug)]
 pub struct Fitter {
     kind: BoundingKind,
     enclosure: Enclosure,
     cache: FitCache,
+    cancel: Cancel,
+    cells: AtomicU64,
+    budget: u64,
 }
 
 /// A two-generation cache with a memory budget: when the young generation outgrows
@@ -106,11 +112,33 @@ impl FitCache {
 impl Fitter {
     /// A fitter for `mesh` sampled as `solid`.
     pub fn new(mesh: &Mesh, solid: &Solid, kind: BoundingKind) -> Self {
+        Self::with_budget(mesh, solid, kind, u64::MAX, Cancel::new())
+    }
+
+    /// A fitter whose [`Fitter::exhausted`] says so once its fits have counted `budget`
+    /// outside cells, or `cancel` is set.
+    pub fn with_budget(
+        mesh: &Mesh,
+        solid: &Solid,
+        kind: BoundingKind,
+        budget: u64,
+        cancel: Cancel,
+    ) -> Self {
         Self {
             kind,
             enclosure: Enclosure::new(mesh, solid),
             cache: FitCache::default(),
+            cancel,
+            cells: AtomicU64::new(0),
+            budget,
         }
+    }
+
+    /// Whether the optional work of the run should stop: its fits have counted more outside
+    /// cells than the budget allows (volumes far larger than their parts, as around many
+    /// scattered specks), or the run was cancelled.
+    pub fn exhausted(&self) -> bool {
+        self.cancel.is_cancelled() || self.cells.load(Ordering::Relaxed) > self.budget
     }
 
     /// The enclosure data (which triangles each part holds).
@@ -142,6 +170,9 @@ impl Fitter {
         let hull = hull_points(points);
         let volume = self.fit_points(solid, &hull);
         let outside = outside_cells(&solid.grid, &volume);
+        crate::work::add(points.len() + outside.len());
+        self.cells
+            .fetch_add(outside.len() as u64, Ordering::Relaxed);
         Fit {
             hull,
             volume,

@@ -32,6 +32,7 @@
 
 pub mod assignment;
 pub mod bounding;
+mod cancel;
 pub mod enclosure;
 mod error;
 pub mod fitting;
@@ -39,6 +40,7 @@ pub mod flooding;
 pub mod hierarchy;
 pub mod initialization;
 pub mod linalg;
+mod math;
 mod mesh;
 pub mod metrics;
 pub mod moments;
@@ -55,7 +57,10 @@ pub mod shapes;
 pub mod tightening;
 pub mod verify;
 mod volume;
+#[doc(hidden)]
+pub mod work;
 
+pub use cancel::Cancel;
 pub use error::Error;
 pub use mesh::{Mesh, MAX_COORDINATE};
 pub use params::{BoundingKind, Params, MAX_SAMPLES};
@@ -78,5 +83,5 @@ pub fn segment_with(
     while let Some(step) = seg.step() {
         on_step(&step);
     }
-    Ok(seg.finish())
+    seg.finish()
 }

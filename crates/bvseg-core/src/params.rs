@@ -52,6 +52,13 @@ pub struct Params {
     pub polish: bool,
     /// Upper bound on Lloyd sweeps per optimisation.
     pub max_sweeps: usize,
+    /// Grow every output volume (and every node of the hierarchy) outward by this distance,
+    /// in mesh units (see [`crate::BoundingVolume::grown`]). The volumes enclose the mesh as
+    /// given, in f64; an engine that stores them, or the mesh, in f32 moves each by up to an
+    /// ulp or so of its coordinates, and a margin of that size (for example `1e-6` times the
+    /// mesh's largest coordinate) keeps the enclosure. Default 0; finite and at least 0. The
+    /// reported figures (TOV, MOV) are those of the grown volumes.
+    pub margin: f64,
 }
 
 impl Default for Params {
@@ -67,6 +74,7 @@ impl Default for Params {
             merge: true,
             polish: true,
             max_sweeps: 100,
+            margin: 0.0,
         }
     }
 }
@@ -102,6 +110,12 @@ impl Params {
             return bad(format!(
                 "max_k must be between 1 and 4096, got {}",
                 self.max_k
+            ));
+        }
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return bad(format!(
+                "margin must be finite and at least 0, got {}",
+                self.margin
             ));
         }
         if self.max_sweeps == 0 {

@@ -33,7 +33,7 @@ use std::sync::Arc;
 use crate::fitting::{Fit, Fitter};
 use crate::flooding::{connected_merges, solid_components};
 use crate::initialization::{cvt, split};
-use crate::metrics::{outside_from_cells, relative};
+use crate::metrics::{outside_from_cells, outside_volumes, relative};
 use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::parallel::{join, threads};
@@ -42,7 +42,8 @@ use crate::reshaping::reshape;
 use crate::sampling::Grid;
 use crate::tightening::{relieve_worst, tighten, Coverage};
 use crate::{
-    hierarchy, BoundingVolume, Error, Mesh, Metrics, Params, Part, Segmentation, Step, StepKind,
+    hierarchy, BoundingVolume, Cancel, Error, Mesh, Metrics, Params, Part, Segmentation, Step,
+    StepKind,
 };
 
 /// Passes of the outside-volume tightening (see [`crate::tightening`]).
@@ -134,14 +135,48 @@ pub struct Segmenter {
     stale: usize,
     history: Vec<Step>,
     result: Option<Segmentation>,
+    cancel: Cancel,
+    /// Whether the work bound cut the run short (see [`WORK_PER_SAMPLE`]).
+    budget_hit: bool,
 }
+
+/// The run's bound on optional work, in outside cells counted by its fits: this many per
+/// sample, plus [`WORK_PER_CELL`] per lattice cell. The shared meshes use under 5 % of it;
+/// a solid of many specks scattered across a large box, whose parts must each span several
+/// of them, makes every fit count a large share of the lattice, and would take minutes.
+/// Once it is spent, refinement, merging and the polish stop where they are: the result is
+/// the partition reached, with its volumes (still enclosing everything), measured.
+pub const WORK_PER_SAMPLE: u64 = 2000;
+
+/// See [`WORK_PER_SAMPLE`].
+pub const WORK_PER_CELL: u64 = 8;
+
+/// Candidate merges fitted at a time: each fit holds its outside cells until it is judged.
+const MERGE_CHUNK: usize = 16;
 
 impl Segmenter {
     /// Validate the input and sample the solid. The remaining work happens in
     /// [`Segmenter::step`].
+    ///
+    /// # Errors
+    ///
+    /// [`Error::InvalidParams`] when `params` fails [`Params::validate`], and the sampling's
+    /// errors: [`Error::NoVolume`], [`Error::TooComplex`].
     pub fn new(mesh: &Mesh, params: &Params) -> Result<Self, Error> {
+        Self::with_cancel(mesh, params, Cancel::new())
+    }
+
+    /// Like [`Segmenter::new`], stopping when `cancel` is set: [`Segmenter::step`] then
+    /// returns `None` and [`Segmenter::finish`] [`Error::Cancelled`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Segmenter::new`], and [`Error::Cancelled`] if `cancel` was set during sampling.
+    pub fn with_cancel(mesh: &Mesh, params: &Params, cancel: Cancel) -> Result<Self, Error> {
         params.validate()?;
+        cancel.check()?;
         let grid = Grid::from_mesh(mesh, params.samples)?;
+        cancel.check()?;
         if grid.len() < 8 {
             return Err(Error::NoVolume(format!(
                 "only {} grid cells lie inside the mesh",
@@ -149,8 +184,10 @@ impl Segmenter {
             )));
         }
         let (comps, ncomp) = solid_components(&grid);
+        let budget = WORK_PER_SAMPLE * grid.len() as u64
+            + WORK_PER_CELL * (grid.dims[0] * grid.dims[1] * grid.dims[2]) as u64;
         let solid = Solid::new(grid);
-        let fitter = Fitter::new(mesh, &solid, params.bounding);
+        let fitter = Fitter::with_budget(mesh, &solid, params.bounding, budget, cancel.clone());
         Ok(Self {
             mesh: mesh.clone(),
             params: params.clone(),
@@ -169,6 +206,8 @@ impl Segmenter {
             stale: 0,
             history: Vec::new(),
             result: None,
+            cancel,
+            budget_hit: false,
         })
     }
 
@@ -258,6 +297,10 @@ impl Segmenter {
 
     /// Do the next step and report it; `None` when the segmentation is complete.
     pub fn step(&mut self) -> Option<Step> {
+        if self.cancel.is_cancelled() {
+            self.phase = Phase::Done;
+            return None;
+        }
         loop {
             match self.phase {
                 Phase::Start => return Some(self.start()),
@@ -305,6 +348,9 @@ impl Segmenter {
 
     /// One split attempt; `None` when refinement is over (the phase has moved on).
     fn refine(&mut self) -> Option<Step> {
+        if self.out_of_work() {
+            return None;
+        }
         let cur = self.state.as_ref()?;
         let k = cur.part.k();
         if self.meets(cur) || k >= self.params.max_k || k >= self.solid.len() / 2 {
@@ -517,45 +563,55 @@ impl Segmenter {
         let Some(cur) = self.state.as_ref() else {
             return Vec::new();
         };
-        // The hull of the union is the hull of the two hulls.
-        let todo: Vec<(Moments, Vec<DVec3>)> = pairs
-            .iter()
-            .map(|&(a, b)| {
-                let m = cur.part.parts[a as usize].merged(&cur.part.parts[b as usize]);
-                let mut pts = cur.fits[a as usize].hull.clone();
-                pts.extend_from_slice(&cur.fits[b as usize].hull);
-                (m, pts)
-            })
-            .collect();
-        self.fitter.fit_candidates(&self.solid, todo);
-        let Some(cur) = self.state.as_ref() else {
-            return Vec::new();
-        };
         let total = self.solid.len() as f64;
         let mut cov = Coverage::new(&self.solid);
         for f in &cur.fits {
             cov.add(&f.outside);
         }
         let mut out = Vec::new();
-        for &(a, b) in pairs {
-            let (a, b) = (a as usize, b as usize);
-            let m = cur.part.parts[a].merged(&cur.part.parts[b]);
-            let Some(fit) = self.fitter.get(&m) else {
-                continue;
+        // A few at a time, so that the fits' outside cells need not all be held at once.
+        for chunk in pairs.chunks(MERGE_CHUNK) {
+            if self.fitter.exhausted() {
+                self.budget_hit |= !self.cancel.is_cancelled();
+                break;
+            }
+            let Some(cur) = self.state.as_ref() else {
+                break;
             };
-            cov.remove(&cur.fits[a].outside);
-            cov.remove(&cur.fits[b].outside);
-            cov.add(&fit.outside);
-            let tov = relative(cov.union, total);
-            cov.remove(&fit.outside);
-            cov.add(&cur.fits[a].outside);
-            cov.add(&cur.fits[b].outside);
-            let ov = relative(fit.outside.len(), m.n);
-            let mov = (0..cur.ov.len())
-                .filter(|&i| i != a && i != b)
-                .map(|i| cur.ov[i])
-                .fold(ov, f64::max);
-            out.push((tov, mov, a, b));
+            // The hull of the union is the hull of the two hulls.
+            let todo: Vec<(Moments, Vec<DVec3>)> = chunk
+                .iter()
+                .map(|&(a, b)| {
+                    let m = cur.part.parts[a as usize].merged(&cur.part.parts[b as usize]);
+                    let mut pts = cur.fits[a as usize].hull.clone();
+                    pts.extend_from_slice(&cur.fits[b as usize].hull);
+                    (m, pts)
+                })
+                .collect();
+            self.fitter.fit_candidates(&self.solid, todo);
+            let Some(cur) = self.state.as_ref() else {
+                break;
+            };
+            for &(a, b) in chunk {
+                let (a, b) = (a as usize, b as usize);
+                let m = cur.part.parts[a].merged(&cur.part.parts[b]);
+                let Some(fit) = self.fitter.get(&m) else {
+                    continue;
+                };
+                cov.remove(&cur.fits[a].outside);
+                cov.remove(&cur.fits[b].outside);
+                cov.add(&fit.outside);
+                let tov = relative(cov.union, total);
+                cov.remove(&fit.outside);
+                cov.add(&cur.fits[a].outside);
+                cov.add(&cur.fits[b].outside);
+                let ov = relative(fit.outside.len(), m.n);
+                let mov = (0..cur.ov.len())
+                    .filter(|&i| i != a && i != b)
+                    .map(|i| cur.ov[i])
+                    .fold(ov, f64::max);
+                out.push((tov, mov, a, b));
+            }
         }
         out
     }
@@ -591,8 +647,22 @@ impl Segmenter {
         best.and_then(|(_, _, a, b)| self.merged_state(a, b))
     }
 
+    /// Whether the work bound is spent (see [`WORK_PER_SAMPLE`]); if so, the run moves on
+    /// to its final step.
+    fn out_of_work(&mut self) -> bool {
+        if self.fitter.exhausted() {
+            self.budget_hit |= !self.cancel.is_cancelled();
+            self.phase = Phase::Final;
+            return true;
+        }
+        false
+    }
+
     /// One merge; `None` when no merge helps (the phase has moved on).
     fn merge(&mut self) -> Option<Step> {
+        if self.out_of_work() {
+            return None;
+        }
         match self.best_merge() {
             Some(s) => Some(self.accept(StepKind::Merge, s)),
             None => {
@@ -643,6 +713,27 @@ impl Segmenter {
         }
     }
 
+    /// `cur` with every volume grown by the margin ([`Params::margin`]), measured again.
+    fn with_margin(&self, cur: State) -> State {
+        if self.params.margin <= 0.0 {
+            return cur;
+        }
+        let volumes: Vec<BoundingVolume> = cur
+            .volumes
+            .iter()
+            .map(|v| v.grown(self.params.margin))
+            .collect();
+        let counts: Vec<f64> = cur.part.parts.iter().map(|m| m.n).collect();
+        let o = outside_volumes(&self.solid.grid, &volumes, &counts);
+        State {
+            volumes,
+            tov: o.tov,
+            mov: o.mov,
+            ov: o.ov,
+            ..cur
+        }
+    }
+
     fn finalize(&mut self) -> Step {
         let Some(cur) = self.state.take() else {
             self.phase = Phase::Done;
@@ -654,7 +745,9 @@ impl Segmenter {
                 mov: f64::NAN,
             };
         };
-        let cur = if self.params.polish {
+        // The polish is optional work: skipped once the work bound is spent.
+        let polish = self.params.polish && !self.out_of_work();
+        let cur = if polish {
             let mut part = cur.part;
             tighten(
                 &self.mesh,
@@ -682,11 +775,12 @@ impl Segmenter {
         } else {
             cur
         };
-        let cur = if self.params.polish {
+        let cur = if polish && !self.out_of_work() {
             self.reshaped(cur)
         } else {
             cur
         };
+        let cur = self.with_margin(cur);
         let k = cur.part.k();
         let n = self.solid.len() as f64;
         let parts: Vec<Part> = (0..k)
@@ -700,8 +794,9 @@ impl Segmenter {
             .collect();
         let adjacency = cur.part.adjacency(&self.solid.grid);
         let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
+        let margin = self.params.margin;
         let hierarchy = hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
-            self.fitter.fit_points(&self.solid, p)
+            self.fitter.fit_points(&self.solid, p).grown(margin)
         });
         let metrics = Metrics {
             k,
@@ -720,6 +815,7 @@ impl Segmenter {
             triangle_parts: self.fitter.enclosure().triangle_parts(&cur.part.labels),
             sample_parts: cur.part.labels.clone(),
             cell_size: self.solid.grid.h,
+            budget_exhausted: false,
         });
         self.state = Some(cur);
         self.phase = Phase::Done;
@@ -727,23 +823,20 @@ impl Segmenter {
     }
 
     /// Run any remaining steps and return the result.
-    pub fn finish(mut self) -> Segmentation {
+    ///
+    /// # Errors
+    ///
+    /// [`Error::Cancelled`] when the run's [`Cancel`] flag was set before it ended.
+    pub fn finish(mut self) -> Result<Segmentation, Error> {
         while self.step().is_some() {}
-        self.result.take().unwrap_or_else(|| Segmentation {
-            kind: self.params.bounding,
-            parts: Vec::new(),
-            metrics: Metrics {
-                k: 0,
-                f: f64::NAN,
-                tov: f64::NAN,
-                mov: f64::NAN,
-                samples: self.solid.len(),
-            },
-            history: self.history.clone(),
-            hierarchy: Vec::new(),
-            triangle_parts: Vec::new(),
-            sample_parts: Vec::new(),
-            cell_size: self.solid.grid.h,
-        })
+        if self.cancel.is_cancelled() {
+            return Err(Error::Cancelled);
+        }
+        let mut r = self
+            .result
+            .take()
+            .ok_or_else(|| Error::Internal("the run ended without a result".into()))?;
+        r.budget_exhausted = self.budget_hit;
+        Ok(r)
     }
 }

@@ -22,6 +22,8 @@
 //! per cent of TOV at k = 32, up to 16 % on the chair's bars and slabs (see BENCHMARKS.md).
 use glam::{DMat3, DQuat, DVec3};
 
+use crate::math;
+
 use crate::metrics::{outside_cells, outside_cells_while, relative, LATTICES};
 use crate::partition::Solid;
 use crate::tightening::Coverage;
@@ -133,7 +135,7 @@ fn search(
     };
     let mut best = *start;
     let mut best_vol = best.volume();
-    let mean_r = (start.radii.x * start.radii.y * start.radii.z).cbrt();
+    let mean_r = math::cbrt(start.radii.x * start.radii.y * start.radii.z);
     // Step sizes: centre (world units), log semi-axes, rotation angle (radians).
     let (mut dc, mut dr, mut da) = (0.25 * mean_r, 0.3f64, 0.2f64);
     let mut trials = 0usize;
@@ -145,9 +147,12 @@ fn search(
             let (mut c, mut axes, mut radii) = (from.center, from.axes, from.radii);
             match dim {
                 0..=2 => c += from.axes.col(dim) * (sign * dc),
-                3..=5 => radii[dim - 3] *= (sign * dr).exp(),
+                3..=5 => radii[dim - 3] *= math::exp(sign * dr),
                 _ => {
-                    let q = DQuat::from_axis_angle(from.axes.col(dim - 6), sign * da);
+                    // `DQuat::from_axis_angle`, with the platform-independent sine.
+                    let (s, c) = math::sin_cos(sign * da * 0.5);
+                    let v = from.axes.col(dim - 6) * s;
+                    let q = DQuat::from_xyzw(v.x, v.y, v.z, c);
                     axes = DMat3::from_quat(q) * axes;
                 }
             }

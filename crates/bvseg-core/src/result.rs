@@ -112,4 +112,9 @@ pub struct Segmentation {
     pub sample_parts: Vec<u32>,
     /// The lattice cell size that was used.
     pub cell_size: f64,
+    /// Whether the run's bound on work cut refinement, merging or the polish short (see
+    /// [`crate::refinement::WORK_PER_SAMPLE`]): the volumes still enclose the mesh, but more
+    /// work would have made them tighter. Happens on solids of many specks scattered over a
+    /// large box, not on ordinary models.
+    pub budget_exhausted: bool,
 }

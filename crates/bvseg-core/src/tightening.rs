@@ -354,6 +354,9 @@ pub fn tighten(
     let mut full = true;
     let mut fulls = 0;
     for _ in 0..passes {
+        if fitter.exhausted() {
+            break;
+        }
         fulls += usize::from(full);
         let mut cands: Vec<Move> = Vec::new();
         for (pair, layer) in layers(solid, part, |_, _| true) {
@@ -459,6 +462,9 @@ pub fn relieve_worst(
     let min_part = min_part(solid, part);
     let mut moves = 0;
     for _ in 0..steps {
+        if fitter.exhausted() {
+            break;
+        }
         let fits = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
         let ov: Vec<f64> = fits
             .iter()

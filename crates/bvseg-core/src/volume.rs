@@ -78,6 +78,39 @@ impl BoundingVolume {
         }
     }
 
+    /// The volume grown outward by at least `d` everywhere: it holds every point within
+    /// distance `d` of this one (its Minkowski sum with a ball of radius `d`). A box's
+    /// half-extents grow by `d`. An ellipsoid's cannot simply grow by `d` (the result would
+    /// miss the offset near the ends of its long axes); of two ellipsoids with the same
+    /// centre and axes that hold the offset, the smaller is taken: all semi-axes scaled by
+    /// `1 + d / a_min`, or `a_j -> sqrt(a_j^2 + 2 d a_max + d^2)` (its support function is at
+    /// least `h + d` since `sum_j a_max u_j^2 = a_max >= h` for a unit direction `u`).
+    #[must_use]
+    pub fn grown(mut self, d: f64) -> Self {
+        if d.is_nan() || d <= 0.0 {
+            return self;
+        }
+        self.radii = match self.shape {
+            Shape::Obb => self.radii + DVec3::splat(d),
+            Shape::Ellipsoid => {
+                let r = self.radii;
+                let scaled = r * (1.0 + d / r.min_element());
+                let c = 2.0 * d * r.max_element() + d * d;
+                let offset = DVec3::new(
+                    (r.x * r.x + c).sqrt(),
+                    (r.y * r.y + c).sqrt(),
+                    (r.z * r.z + c).sqrt(),
+                );
+                if offset.x * offset.y * offset.z < scaled.x * scaled.y * scaled.z {
+                    offset
+                } else {
+                    scaled
+                }
+            }
+        };
+        self
+    }
+
     /// Axis-aligned bounding box `(min, max)`.
     pub fn aabb(&self) -> (DVec3, DVec3) {
         let a = self.axes;

@@ -54,7 +54,8 @@ impl LoadedMesh {
     pub fn encloses_no_volume(&self) -> bool {
         let r = &self.report;
         let size = r.bbox_max - r.bbox_min;
-        r.volume.abs() <= 1e-9 * size.max_element().powi(3)
+        let s = size.max_element();
+        r.volume.abs() <= 1e-9 * s * s * s
     }
 
     /// What loading changed or found that a user should know, one line each: welded
@@ -112,6 +113,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
             message: "too many vertices (more than 2^32)".into(),
         });
     }
+    bvseg_core::work::add(positions.len() + triangles.len());
     let vertices_read = positions.len();
     let triangles_read = triangles.len();
     let (vertices, remap) = weld(&positions);

@@ -241,6 +241,7 @@ mod tests {
             triangle_parts: vec![0, 1, 1],
             sample_parts: vec![0; 100],
             cell_size: 0.125,
+            budget_exhausted: false,
         }
     }
 

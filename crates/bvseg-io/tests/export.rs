@@ -52,6 +52,7 @@ fn seg() -> Segmentation {
         triangle_parts: vec![0, 1],
         sample_parts: vec![],
         cell_size: 0.1,
+        budget_exhausted: false,
     }
 }
 

@@ -132,7 +132,13 @@ impl Session {
                     else {
                         unreachable!("matched above");
                     };
-                    let result = seg.finish();
+                    let result = match seg.finish() {
+                        Ok(r) => r,
+                        Err(e) => {
+                            self.stage = Stage::Failed(e);
+                            return Progress::Failed;
+                        }
+                    };
                     if let Some(last) = self.snapshots.last_mut() {
                         if last.step.kind == StepKind::Final {
                             // The final colouring: the part whose volume encloses each triangle.

@@ -953,7 +953,8 @@ fn polygon(q: &[DVec3], nrm: DVec3, eps: f64) -> Vec<usize> {
         let (o, a, b) = (xy(o), xy(a), xy(b));
         let c =
             (a.0 - o.0) as i128 * (b.1 - o.1) as i128 - (a.1 - o.1) as i128 * (b.0 - o.0) as i128;
-        let len = (((b.0 - o.0) as f64).powi(2) + ((b.1 - o.1) as f64).powi(2)).sqrt();
+        let (dx, dy) = ((b.0 - o.0) as f64, (b.1 - o.1) as f64);
+        let len = (dx * dx + dy * dy).sqrt();
         c <= 0 || (c as f64) <= eps * len
     };
     let mut hull: Vec<usize> = Vec::with_capacity(64);

@@ -25,6 +25,7 @@
 // Small dense matrix code (N <= 4, K <= 10) reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+use crate::math;
 use glam::{DMat3, DVec3};
 
 use super::hull::convex_hull;
@@ -242,7 +243,7 @@ fn fit_subspace(f: &Frame, v: &[DVec3], keep: &[usize], tol: f64) -> Option<SubF
     // Once every lifted point has `omega <= (d + 1)(1 + eps)`, the duality gap of the lifted
     // problem bounds the volume of the ellipsoid grown to hold them by (1 + eps)^((d+1)/2)
     // times the minimum; the final rescaling only shrinks that ellipsoid.
-    let eps = (1.0 + tol).powf(2.0 / (d + 1) as f64) - 1.0;
+    let eps = math::powf(1.0 + tol, 2.0 / (d + 1) as f64) - 1.0;
     let (c, s) = match d {
         // A segment: the unit box's extremes are attained, so the MVEE is [-1, 1].
         1 => ([0.0; 3], {
@@ -327,7 +328,7 @@ impl<const N: usize> WaTy<N> {
         // coordinate steps certify `eps` from its weights (see the module docs). Should it
         // fail, coordinate steps start from the core set alone and grow an active set from
         // the most violated points.
-        let gap = n * (1.0 + eps).ln();
+        let gap = n * math::ln(1.0 + eps);
         let (idx, w) = match barrier::<N, K>(q, &u0, gap) {
             Some(u) => ((0..q.len()).collect(), u),
             None => (core.clone(), vec![1.0 / core.len() as f64; core.len()]),
@@ -655,10 +656,10 @@ fn barrier<const N: usize, const K: usize>(
                         prod *= slack;
                     }
                     if prod.is_normal() && prod < 1e300 {
-                        f -= prod.ln();
+                        f -= math::ln(prod);
                     } else {
                         for (si, di) in sc.iter().zip(dc) {
-                            f -= (1.0 - si + a * di).ln();
+                            f -= math::ln(1.0 - si + a * di);
                         }
                     }
                 }
@@ -806,7 +807,7 @@ fn log_det<const N: usize>(mut a: [[f64; N]; N]) -> Option<f64> {
             return None;
         }
         let d = d.sqrt();
-        ld += 2.0 * d.ln();
+        ld += 2.0 * math::ln(d);
         for i in j + 1..N {
             let mut v = a[i][j];
             for p in 0..j {

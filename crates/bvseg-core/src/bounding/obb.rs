@@ -14,6 +14,7 @@
 //!   become extreme within the remaining rotation.
 //!
 //! Everything is evaluated on the hull vertices; the final extents are taken over all points.
+use crate::math;
 use glam::{DMat3, DVec2, DVec3};
 
 use super::hull::convex_hull;
@@ -423,7 +424,7 @@ fn refine(mut r: DMat3, mut vol: f64, v: &[DVec3], min_r: f64) -> (f64, DMat3) {
                         }));
                     }
                     let mut rot = DMat3::IDENTITY;
-                    let (s, c) = (sign * step).sin_cos();
+                    let (s, c) = math::sin_cos(sign * step);
                     let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
                     rot.col_mut(i)[i] = c;
                     rot.col_mut(i)[j] = s;

@@ -14,7 +14,7 @@
 //! cavity (winding 0) while an inner shell of the same orientation stays solid (winding 2).
 //!
 //! Each triangle only touches the columns its projection covers, so it is rasterised over
-//! the column lattice (a scan of its projected bounding box) and each crossing is added to a
+//! the column lattice (row by row, over the columns near its projection) and each crossing is added to a
 //! difference array shaped like the lattice, with one extra layer along the column axis for
 //! crossings past the far end. A prefix sum along the axis turns it into windings; the extra
 //! layer then holds each column's total. Cost is O(triangles + covered columns + cells), with
@@ -56,13 +56,25 @@ use glam::DVec3;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use crate::Mesh;
+use crate::parallel::{map, threads};
+use crate::{Error, Mesh};
 
 /// Lattice coordinates are clamped to this magnitude (far beyond any lattice that fits in
 /// memory) so that products of two stay finite and roundings to `i64` cannot saturate,
 /// whatever `origin` and `h` the caller passes. Clamping moves shared vertices together, so
 /// a closed surface stays closed.
 const COORD_LIMIT: f64 = 1e15;
+
+/// The bound on the inside tests' work over a lattice of `cells` cells, in lattice columns
+/// scanned by triangles (a triangle scans about the columns its projection covers, once per
+/// pass): 20 per cell, plus 50 million. A closed mesh scans about four times the columns
+/// of a pass per layer of surface it crosses, so this allows over a thousand layers at the
+/// default sample count; beyond it the triangles overlap far more than any modelled surface
+/// does (stacked copies, a fan of huge slivers), and the run is refused in a fraction of a
+/// second instead of taking minutes.
+pub fn column_budget(cells: f64) -> u64 {
+    (50e6 + 20.0 * cells.max(0.0)).min(1e18) as u64
+}
 
 /// For every cell centre `origin + h * (i, j, k)` of a `dims` lattice, whether it lies inside
 /// the solid bounded by `mesh`. Index `i + nx * (j + ny * k)`.
@@ -76,37 +88,90 @@ const COORD_LIMIT: f64 = 1e15;
 ///
 /// Returns all `false` when `h` is not a positive finite number or `origin` is not finite.
 /// The result does not depend on the number of threads.
-pub fn inside_cells(mesh: &Mesh, origin: DVec3, h: f64, dims: [usize; 3]) -> Vec<bool> {
+///
+/// # Errors
+///
+/// [`Error::TooComplex`] when the triangles would scan more than [`column_budget`] lattice
+/// columns.
+pub fn inside_cells(
+    mesh: &Mesh,
+    origin: DVec3,
+    h: f64,
+    dims: [usize; 3],
+) -> Result<Vec<bool>, Error> {
+    let mut budget = column_budget((dims[0] * dims[1] * dims[2]) as f64);
+    inside_cells_within(mesh, origin, h, dims, &mut budget)
+}
+
+/// [`inside_cells`], drawing its work from `budget` (in scanned columns), so that the
+/// sampling's several lattices share one bound.
+pub(crate) fn inside_cells_within(
+    mesh: &Mesh,
+    origin: DVec3,
+    h: f64,
+    dims: [usize; 3],
+    budget: &mut u64,
+) -> Result<Vec<bool>, Error> {
     let ncells = dims[0] * dims[1] * dims[2];
     if ncells == 0 || !(h > 0.0 && h.is_finite()) || !origin.is_finite() {
-        return vec![false; ncells];
+        return Ok(vec![false; ncells]);
     }
     let pts = lattice_coords(mesh, origin, h);
-    let tris = mesh.triangles();
-
-    let z = Pass::new(2, dims);
+    let tris = weighted_triangles(mesh.triangles());
+    let [x, y, z] = [0, 1, 2].map(|axis| Pass::new(axis, dims));
+    // What each pass will cost is known before any of them runs.
+    let mut spend = |scans: u64| {
+        if scans > *budget {
+            return Err(Error::TooComplex(
+                "sampling it would scan its lattice's columns more than 20 times per cell: \
+                 far more overlapping surface than a model has"
+                    .into(),
+            ));
+        }
+        *budget -= scans;
+        crate::work::add(scans as usize);
+        Ok(())
+    };
+    spend(z.scans(&pts, &tris))?;
     // The topology check costs about as much as the z pass; overlap them when possible.
     #[cfg(feature = "parallel")]
-    let (wz, closed) = rayon::join(|| z.windings(&pts, tris), || is_closed(mesh));
+    let (wz, closed) = rayon::join(|| z.windings(&pts, &tris), || is_closed(mesh));
     #[cfg(not(feature = "parallel"))]
     let (wz, closed) = {
-        let w = z.windings(&pts, tris);
+        let w = z.windings(&pts, &tris);
         let closed = z.all_columns_close(&w) && is_closed(mesh);
         (w, closed)
     };
     if closed && z.all_columns_close(&wz) {
-        return wz[..ncells].iter().map(|&w| w != 0).collect();
+        return Ok(wz[..ncells].iter().map(|&w| w != 0).collect());
     }
+    spend(x.scans(&pts, &tris) + y.scans(&pts, &tris))?;
     let mut votes = vec![0u8; ncells];
     z.add_votes(&wz, &mut votes);
     // Keep at most one winding array alive at a time.
     drop(wz);
-    for axis in [0, 1] {
-        let pass = Pass::new(axis, dims);
-        let w = pass.windings(&pts, tris);
+    for pass in [x, y] {
+        let w = pass.windings(&pts, &tris);
         pass.add_votes(&w, &mut votes);
     }
-    votes.into_iter().map(|v| v >= 3).collect()
+    Ok(votes.into_iter().map(|v| v >= 3).collect())
+}
+
+/// The distinct index triples of `tris`, each with its number of copies, in order of first
+/// appearance. Windings are sums over triangles and a copy crosses exactly the same columns
+/// at exactly the same places, so rasterising each triple once with its count gives the
+/// same windings at a fraction of the cost when a file repeats faces (a polygon fanned over
+/// a few corners, stacked duplicates).
+fn weighted_triangles(tris: &[[u32; 3]]) -> Vec<([u32; 3], i32)> {
+    let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+    order.sort_unstable_by_key(|&i| (tris[i as usize], i));
+    let mut out: Vec<(u32, [u32; 3], i32)> = Vec::with_capacity(tris.len());
+    for run in order.chunk_by(|&a, &b| tris[a as usize] == tris[b as usize]) {
+        // Counts wrap like the windings they add to; a mesh has far fewer than 2^31 faces.
+        out.push((run[0], tris[run[0] as usize], run.len() as i32));
+    }
+    out.sort_unstable_by_key(|e| e.0);
+    out.into_iter().map(|(_, t, n)| (t, n)).collect()
 }
 
 /// Vertex positions in lattice units (cell centres at integers). Converted once per vertex,
@@ -164,34 +229,71 @@ impl Pass {
         self.ext[0] * self.ext[1] * self.ext[2]
     }
 
+    /// Columns the triangles scan in this pass (about the area of their projections, see
+    /// [`Pass::rows`]): the cost of [`Pass::windings`].
+    fn scans(&self, pts: &[[f64; 3]], tris: &[([u32; 3], i32)]) -> u64 {
+        tris.iter()
+            .map(|(t, _)| self.scans_of(&t.map(|i| pts[i as usize])))
+            .sum()
+    }
+
+    /// Columns triangle `p` scans in this pass.
+    #[inline]
+    fn scans_of(&self, p: &[[f64; 3]; 3]) -> u64 {
+        let mut n = 0;
+        self.rows(p, |_, u0, u1| n += (u1 - u0 + 1) as u64);
+        n
+    }
+
     /// Winding number of every cell (and column totals in the extra layer).
-    fn windings(&self, pts: &[[f64; 3]], tris: &[[u32; 3]]) -> Vec<i32> {
+    fn windings(&self, pts: &[[f64; 3]], tris: &[([u32; 3], i32)]) -> Vec<i32> {
         let mut w = vec![0i32; self.len()];
         let corners = |t: &[u32; 3]| t.map(|i| pts[i as usize]);
-        #[cfg(feature = "parallel")]
-        {
-            // Integer sums commute, so collecting per chunk and adding in any order gives
-            // the same array whatever the thread count.
-            let lists: Vec<Vec<(usize, i32)>> = tris
-                .par_chunks(2048)
-                .map(|chunk| {
-                    let mut out = Vec::new();
-                    for t in chunk {
-                        self.rasterize(&corners(t), |i, s| out.push((i, s)));
-                    }
-                    out
-                })
-                .collect();
-            for (i, s) in lists.into_iter().flatten() {
-                w[i] = w[i].wrapping_add(s);
+        // Runs of triangles scanning about CHUNK_SCANS columns each, rasterised a few runs
+        // at a time into crossing lists that are added up before the next few: memory stays
+        // bounded however large the triangles. Integer sums commute, so neither the runs nor
+        // the thread count change the result. Indices fit in u32 (the lattice is capped far
+        // below 2^32 cells), which halves the lists.
+        const CHUNK_SCANS: u64 = 1 << 18;
+        let mut runs = Vec::new();
+        let (mut start, mut acc) = (0, 0);
+        for (i, (t, _)) in tris.iter().enumerate() {
+            acc += self.scans_of(&corners(t));
+            if acc >= CHUNK_SCANS || i + 1 - start == 4096 {
+                runs.push(start..i + 1);
+                (start, acc) = (i + 1, 0);
             }
         }
-        #[cfg(not(feature = "parallel"))]
-        for t in tris {
-            self.rasterize(&corners(t), |i, s| w[i] = w[i].wrapping_add(s));
+        if start < tris.len() {
+            runs.push(start..tris.len());
+        }
+        for batch in runs.chunks(4 * threads()) {
+            let lists = map(batch, |run| {
+                let mut out: Vec<(u32, i32)> = Vec::new();
+                for (t, n) in &tris[run.clone()] {
+                    self.rasterize(&corners(t), |i, s| out.push((i as u32, s * n)));
+                }
+                out
+            });
+            for (i, s) in lists.into_iter().flatten() {
+                w[i as usize] = w[i as usize].wrapping_add(s);
+            }
         }
         self.prefix_sum(&mut w);
         w
+    }
+
+    /// The lattice range `[first, last]` of the triangle's projection along axis `ax`, if
+    /// it meets the lattice.
+    #[inline]
+    fn span(&self, p: &[[f64; 3]; 3], ax: usize) -> Option<(usize, usize)> {
+        let lo = p[0][ax].min(p[1][ax]).min(p[2][ax]);
+        let hi = p[0][ax].max(p[1][ax]).max(p[2][ax]);
+        // The displaced centre sits just above an integer, so a column at the upper
+        // bound is never covered; keeping it is harmless, the exact test rejects it.
+        let first = ceil_i(lo).max(0);
+        let last = floor_i(hi).min(self.dims[ax] as i64 - 1);
+        (first <= last).then_some((first as usize, last as usize))
     }
 
     /// Emit `(index of the first cell after the crossing, +-1)` for every column that the
@@ -199,19 +301,7 @@ impl Pass {
     #[inline]
     fn rasterize(&self, p: &[[f64; 3]; 3], mut emit: impl FnMut(usize, i32)) {
         let (u, v) = (self.u, self.v);
-        let span = |ax: usize| {
-            let lo = p[0][ax].min(p[1][ax]).min(p[2][ax]);
-            let hi = p[0][ax].max(p[1][ax]).max(p[2][ax]);
-            // The displaced centre sits just above an integer, so a column at the upper
-            // bound is never covered; keeping it is harmless, the exact test rejects it.
-            let first = ceil_i(lo).max(0);
-            let last = floor_i(hi).min(self.dims[ax] as i64 - 1);
-            (first <= last).then_some((first as usize, last as usize))
-        };
-        let (Some((u0, u1)), Some((v0, v1))) = (span(u), span(v)) else {
-            return;
-        };
-        for iv in v0..=v1 {
+        self.rows(p, |iv, u0, u1| {
             for iu in u0..=u1 {
                 if let Some((k0, s)) = self.crossing(p, iu as f64, iv as f64) {
                     emit(
@@ -219,6 +309,56 @@ impl Pass {
                         s,
                     );
                 }
+            }
+        });
+    }
+
+    /// Calls `row(iv, u0, u1)` for every lattice row `iv` the triangle's projection meets,
+    /// with a range of columns `u0..=u1` that holds every column of the row it covers.
+    ///
+    /// The range is where the row's line meets the projected triangle, widened by more than
+    /// the rounding error of that intersection, so that only columns certainly outside are
+    /// skipped: the exact test decides the rest, as if the whole bounding box were scanned.
+    /// A sliver spanning the lattice then costs its rows, not its bounding box.
+    #[inline]
+    fn rows(&self, p: &[[f64; 3]; 3], mut row: impl FnMut(usize, usize, usize)) {
+        let (u, v) = (self.u, self.v);
+        let (Some((u0, u1)), Some((v0, v1))) = (self.span(p, u), self.span(p, v)) else {
+            return;
+        };
+        let big = p
+            .iter()
+            .map(|q| q[u].abs().max(q[v].abs()))
+            .fold(0.0, f64::max);
+        let margin = 1.0 + 1e-12 * big;
+        for iv in v0..=v1 {
+            let y = iv as f64;
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for e in 0..3 {
+                let (a, b) = (p[e], p[(e + 1) % 3]);
+                if (a[v] - y) * (b[v] - y) > 0.0 {
+                    continue;
+                }
+                let x = if a[v] == b[v] {
+                    lo = lo.min(a[u].min(b[u]));
+                    a[u].max(b[u])
+                } else {
+                    a[u] + (y - a[v]) * ((b[u] - a[u]) / (b[v] - a[v]))
+                };
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+            let (first, last) = if lo <= hi {
+                (
+                    ceil_i(lo - margin).max(u0 as i64) as usize,
+                    floor_i(hi + margin).min(u1 as i64),
+                )
+            } else {
+                // No edge found across the row (rounding): scan the whole bounding box row.
+                (u0, u1 as i64)
+            };
+            if first as i64 <= last {
+                row(iv, first, last as usize);
             }
         }
     }
@@ -754,7 +894,7 @@ mod tests {
     ) -> (Vec<bool>, Vec<bool>, bool) {
         let pts = lattice_coords(mesh, origin, h);
         let pass = Pass::new(axis, dims);
-        let w = pass.windings(&pts, mesh.triangles());
+        let w = pass.windings(&pts, &weighted_triangles(mesh.triangles()));
         let (mut near, mut far) = (Vec::new(), Vec::new());
         for k in 0..dims[2] {
             for j in 0..dims[1] {
@@ -793,7 +933,7 @@ mod tests {
             assert!(!edges_balance(s.soup().triangles(), s.verts.len(), |i| i));
             assert!(is_closed(&s.soup()));
             for mesh in [s.welded(), s.soup(), s.clone().flipped().welded()] {
-                let got = inside_cells(&mesh, DVec3::ZERO, 1.0, dims);
+                let got = inside_cells(&mesh, DVec3::ZERO, 1.0, dims).unwrap();
                 assert_eq!(count(&got), 5 * 5 * 10);
                 assert!(got == expected);
                 assert_all_passes(&mesh, DVec3::ZERO, 1.0, dims, &expected);
@@ -805,7 +945,7 @@ mod tests {
         let dims = [10, 9, 8];
         let expected = boxes_mask(dims, &[([3, 3, 3], [8, 7, 6])]);
         let mesh = s.welded();
-        assert!(inside_cells(&mesh, origin, 0.25, dims) == expected);
+        assert!(inside_cells(&mesh, origin, 0.25, dims).unwrap() == expected);
         assert_all_passes(&mesh, origin, 0.25, dims, &expected);
     }
 
@@ -846,7 +986,7 @@ mod tests {
                 }
             }
         }
-        assert!(inside_cells(&mesh, DVec3::ZERO, 1.0, dims) == expected);
+        assert!(inside_cells(&mesh, DVec3::ZERO, 1.0, dims).unwrap() == expected);
         assert_all_passes(&mesh, DVec3::ZERO, 1.0, dims, &expected);
     }
 
@@ -858,7 +998,7 @@ mod tests {
             .welded();
         let h = 1.0 / 30.0;
         let (origin, dims) = lattice(&mesh, h);
-        let n = count(&inside_cells(&mesh, origin, h, dims)) as f64;
+        let n = count(&inside_cells(&mesh, origin, h, dims).unwrap()) as f64;
         let expected = 1.0 / (h * h * h);
         assert!((n / expected - 1.0).abs() < 0.01, "{n} vs {expected}");
     }
@@ -872,7 +1012,7 @@ mod tests {
             // Centre the lattice on the sphere so that the poles sit on a column.
             let dims = [55, 55, 55];
             let origin = c - 27.0 * h * DVec3::ONE;
-            let got = inside_cells(&mesh, origin, h, dims);
+            let got = inside_cells(&mesh, origin, h, dims).unwrap();
             let expected = mesh.signed_volume() / (h * h * h);
             let n = count(&got) as f64;
             assert!((n / expected - 1.0).abs() < 0.01, "{n} vs {expected}");
@@ -880,7 +1020,7 @@ mod tests {
             assert_all_passes(&mesh, origin, h, dims, &got);
             let flipped = s.clone().flipped().welded();
             assert!(mesh.signed_volume() < 0.0 || flipped.signed_volume() < 0.0);
-            assert!(inside_cells(&flipped, origin, h, dims) == got);
+            assert!(inside_cells(&flipped, origin, h, dims).unwrap() == got);
         }
     }
 
@@ -893,7 +1033,7 @@ mod tests {
         let check = |s: Soup, boxes: &[([usize; 3], [usize; 3])]| {
             let mesh = s.welded();
             let expected = boxes_mask(dims, boxes);
-            assert!(inside_cells(&mesh, o, 1.0, dims) == expected);
+            assert!(inside_cells(&mesh, o, 1.0, dims).unwrap() == expected);
             assert_all_passes(&mesh, o, 1.0, dims, &expected);
         };
         // Two disjoint cubes.
@@ -905,7 +1045,7 @@ mod tests {
         // Nested shell with opposite orientation: a cavity (winding 0 inside it).
         let hollow = b(1.0, 10.0).add(&b(4.0, 7.0).flipped());
         let mesh = hollow.welded();
-        let got = inside_cells(&mesh, o, 1.0, dims);
+        let got = inside_cells(&mesh, o, 1.0, dims).unwrap();
         assert_eq!(count(&got), 9 * 9 * 9 - 3 * 3 * 3);
         let cavity = boxes_mask(dims, &[box_(4, 7)]);
         let outer = boxes_mask(dims, &[box_(1, 10)]);
@@ -916,7 +1056,7 @@ mod tests {
         check(b(1.0, 10.0).add(&b(4.0, 7.0)), &[box_(1, 10)]);
         // Inverted outer shell with an inner shell facing out: still a cavity.
         let mesh = b(1.0, 10.0).flipped().add(&b(4.0, 7.0)).welded();
-        assert!(inside_cells(&mesh, o, 1.0, dims) == got);
+        assert!(inside_cells(&mesh, o, 1.0, dims).unwrap() == got);
     }
 
     #[test]
@@ -925,7 +1065,7 @@ mod tests {
         let s = icosphere(3, 1.0, DVec3::new(0.013, -0.007, 0.021));
         let closed = s.welded();
         let (origin, dims) = lattice(&closed, h);
-        let reference = inside_cells(&closed, origin, h, dims);
+        let reference = inside_cells(&closed, origin, h, dims).unwrap();
         let n_ref = count(&reference) as f64;
 
         // A few scattered triangles removed.
@@ -935,7 +1075,7 @@ mod tests {
         }
         let holed = holed.welded();
         assert!(!is_closed(&holed));
-        let got = inside_cells(&holed, origin, h, dims);
+        let got = inside_cells(&holed, origin, h, dims).unwrap();
         let diff = got.iter().zip(&reference).filter(|(a, b)| a != b).count() as f64;
         assert!(diff / n_ref < 0.01, "{diff} cells differ out of {n_ref}");
 
@@ -946,7 +1086,7 @@ mod tests {
         }
         let flipped = flipped.welded();
         assert!(!is_closed(&flipped));
-        let got = inside_cells(&flipped, origin, h, dims);
+        let got = inside_cells(&flipped, origin, h, dims).unwrap();
         let diff = got.iter().zip(&reference).filter(|(a, b)| a != b).count() as f64;
         assert!(diff / n_ref < 0.01, "{diff} cells differ out of {n_ref}");
     }
@@ -962,7 +1102,7 @@ mod tests {
         });
         let mesh = s.welded();
         let dims = [10, 10, 10];
-        let got = inside_cells(&mesh, DVec3::ZERO, 1.0, dims);
+        let got = inside_cells(&mesh, DVec3::ZERO, 1.0, dims).unwrap();
         assert!(got == boxes_mask(dims, &[([2; 3], [7; 3])]));
     }
 
@@ -972,7 +1112,7 @@ mod tests {
         let mesh = torus(big, small, 64, 32).welded();
         let h = 0.03;
         let (origin, dims) = lattice(&mesh, h);
-        let got = inside_cells(&mesh, origin, h, dims);
+        let got = inside_cells(&mesh, origin, h, dims).unwrap();
         let expected = mesh.signed_volume() / (h * h * h);
         let n = count(&got) as f64;
         assert!((n / expected - 1.0).abs() < 0.015, "{n} vs {expected}");
@@ -1009,7 +1149,7 @@ mod tests {
         let pts = lattice_coords(&mesh, origin, h);
         for axis in 0..3 {
             let pass = Pass::new(axis, dims);
-            let fast = pass.windings(&pts, mesh.triangles());
+            let fast = pass.windings(&pts, &weighted_triangles(mesh.triangles()));
             let mut slow = vec![0i32; pass.len()];
             for t in mesh.triangles() {
                 let p = t.map(|i| pts[i as usize]);
@@ -1065,16 +1205,16 @@ mod tests {
                 (DVec3::splat(f64::INFINITY), 1.0),
             ] {
                 for dims in [[8, 8, 8], [1, 1, 1], [0, 3, 3], [5, 1, 7]] {
-                    let got = inside_cells(mesh, origin, h, dims);
+                    let got = inside_cells(mesh, origin, h, dims).unwrap();
                     assert_eq!(got.len(), dims[0] * dims[1] * dims[2]);
                 }
             }
         }
         // The scaled cubes still work at extreme scales (faces half a cell off the centres,
         // as rounding makes exact ties unlikely there).
-        let got = inside_cells(&huge, DVec3::splat(-1.75e100), 0.5e100, [8, 8, 8]);
+        let got = inside_cells(&huge, DVec3::splat(-1.75e100), 0.5e100, [8, 8, 8]).unwrap();
         assert_eq!(count(&got), 4 * 4 * 4);
-        let got = inside_cells(&tiny, DVec3::splat(-1.75e-90), 0.5e-90, [8, 8, 8]);
+        let got = inside_cells(&tiny, DVec3::splat(-1.75e-90), 0.5e-90, [8, 8, 8]).unwrap();
         assert_eq!(count(&got), 4 * 4 * 4);
     }
 
@@ -1104,7 +1244,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| inside_cells(&mesh, origin, h, dims))
+                .install(|| inside_cells(&mesh, origin, h, dims).unwrap())
         };
         let one = run(1);
         assert!(run(2) == one);

@@ -15,6 +15,7 @@
 pub mod inside;
 mod shells;
 
+use crate::math;
 use glam::DVec3;
 
 use crate::{Error, Mesh};
@@ -66,10 +67,12 @@ impl Grid {
             vol = box_vol * 0.25;
         }
         let target = target.max(1) as f64;
-        let mut h = (vol / target).cbrt();
+        let mut h = math::cbrt(vol / target);
         // Keep the lattice bounded whatever the shape: at most ~64x the target in cells.
         let max_cells = 64.0 * target + 1e6;
-        let mut grid = Self::from_mesh_with_h(mesh, h, max_cells)?;
+        // One bound on the inside tests' work for all the lattices tried.
+        let mut budget = inside::column_budget(max_cells);
+        let mut grid = Self::from_mesh_with_h(mesh, h, max_cells, &mut budget)?;
         for _ in 0..3 {
             let n = grid.points.len() as f64;
             let ratio = n / target;
@@ -77,8 +80,13 @@ impl Grid {
                 break;
             }
             // A thin solid can hide between cell centres: shrink h until it shows up.
-            h *= if n == 0.0 { 0.25 } else { ratio.cbrt() };
-            grid = Self::from_mesh_with_h(mesh, h, max_cells)?;
+            h *= if n == 0.0 { 0.25 } else { math::cbrt(ratio) };
+            match Self::from_mesh_with_h(mesh, h, max_cells, &mut budget) {
+                Ok(g) => grid = g,
+                // A finer lattice would cost too much: keep the samples found so far.
+                Err(Error::TooComplex(_)) if n > 0.0 => break,
+                Err(e) => return Err(e),
+            }
         }
         if grid.points.is_empty() {
             return Err(Error::NoVolume(
@@ -88,13 +96,19 @@ impl Grid {
         Ok(grid)
     }
 
-    fn from_mesh_with_h(mesh: &Mesh, h: f64, max_cells: f64) -> Result<Self, Error> {
+    fn from_mesh_with_h(
+        mesh: &Mesh,
+        h: f64,
+        max_cells: f64,
+        budget: &mut u64,
+    ) -> Result<Self, Error> {
         let (lo, hi) = mesh.bbox();
         let (origin, dims, h) = lattice_for_box(lo, hi, h, max_cells);
-        let mut inside = inside::inside_cells(mesh, origin, h, dims);
+        let mut inside = inside::inside_cells_within(mesh, origin, h, dims, budget)?;
         shells::mark_sub_cell_shells(mesh, origin, h, dims, &mut inside);
+        let offset_origin = origin + DVec3::splat(0.5 * h);
         let offset =
-            inside::inside_cells(mesh, origin + DVec3::splat(0.5 * h), h, offset_dims(dims));
+            inside::inside_cells_within(mesh, offset_origin, h, offset_dims(dims), budget)?;
         Ok(Self::from_masks(origin, h, dims, &inside, offset))
     }
 

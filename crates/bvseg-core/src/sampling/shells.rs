@@ -54,6 +54,9 @@ pub(crate) fn mark_sub_cell_shells(
         return;
     }
     let [nx, ny, nz] = dims;
+    // Inside cells in each box of the lattice in O(1), so that many large shells cost no
+    // more than a few small ones. Built lazily: most meshes have no closed small shell.
+    let mut counts: Option<BoxCounts> = None;
     for shell in &shells {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -81,37 +84,94 @@ pub(crate) fn mark_sub_cell_shells(
         if edges != rev || vol == 0.0 {
             continue;
         }
-        // Lattice range of the centres inside the shell's box.
-        let to_cell = |x: f64, o: f64, n: usize, up: bool| -> usize {
-            let t = (x - o) / h;
-            let t = if up { t.floor() } else { t.ceil() };
-            t.clamp(0.0, (n - 1) as f64) as usize
+        // The lattice range of the centres inside the shell's box, per axis: a centre's
+        // coordinate `origin + h i` is monotone in `i`, so the box test is separable.
+        let range = |a: usize, n: usize| -> Option<(usize, usize)> {
+            let at = |i: usize| origin[a] + h * i as f64;
+            let t = ((lo[a] - origin[a]) / h).ceil().clamp(0.0, n as f64) as usize;
+            let mut first = t;
+            while first > 0 && at(first - 1) >= lo[a] {
+                first -= 1;
+            }
+            while first < n && at(first) < lo[a] {
+                first += 1;
+            }
+            let mut end = ((hi[a] - origin[a]) / h)
+                .floor()
+                .clamp(-1.0, n as f64 - 1.0) as i64
+                + 1;
+            while end > 0 && at(end as usize - 1) > hi[a] {
+                end -= 1;
+            }
+            while (end as usize) < n && at(end as usize) <= hi[a] {
+                end += 1;
+            }
+            (first < end as usize).then_some((first, end as usize))
         };
-        let (i0, i1) = (
-            to_cell(lo.x, origin.x, nx, false),
-            to_cell(hi.x, origin.x, nx, true),
-        );
-        let (j0, j1) = (
-            to_cell(lo.y, origin.y, ny, false),
-            to_cell(hi.y, origin.y, ny, true),
-        );
-        let (k0, k1) = (
-            to_cell(lo.z, origin.z, nz, false),
-            to_cell(hi.z, origin.z, nz, true),
-        );
-        let inside_box = |i: usize, j: usize, k: usize| {
-            let p = origin + h * DVec3::new(i as f64, j as f64, k as f64);
-            p.cmpge(lo).all() && p.cmple(hi).all()
+        let has_sample = match (range(0, nx), range(1, ny), range(2, nz)) {
+            (Some(x), Some(y), Some(z)) => counts
+                .get_or_insert_with(|| BoxCounts::new(mask, dims))
+                .any(x, y, z),
+            _ => false,
         };
-        let has_sample = (k0..=k1).any(|k| {
-            (j0..=j1).any(|j| (i0..=i1).any(|i| mask[i + nx * (j + ny * k)] && inside_box(i, j, k)))
-        });
         if !has_sample {
             let t = ((c - origin) / h).round();
             let cell = |x: f64, n: usize| x.clamp(0.0, (n - 1) as f64) as usize;
             let (i, j, k) = (cell(t.x, nx), cell(t.y, ny), cell(t.z, nz));
             mask[i + nx * (j + ny * k)] = true;
         }
+    }
+}
+
+/// A summed-volume table of an inside mask: `s[(i, j, k)]` is the number of inside cells
+/// with all coordinates below `(i, j, k)`.
+struct BoxCounts {
+    s: Vec<u32>,
+    dims: [usize; 3],
+}
+
+impl BoxCounts {
+    fn new(mask: &[bool], dims: [usize; 3]) -> Self {
+        let [nx, ny, nz] = dims.map(|n| n + 1);
+        let mut s = vec![0u32; nx * ny * nz];
+        let at = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+        for k in 1..nz {
+            for j in 1..ny {
+                for i in 1..nx {
+                    let m = u32::from(mask[(i - 1) + dims[0] * ((j - 1) + dims[1] * (k - 1))]);
+                    // Inclusion-exclusion; the intermediate may wrap, the result cannot.
+                    s[at(i, j, k)] = m
+                        .wrapping_add(s[at(i - 1, j, k)])
+                        .wrapping_add(s[at(i, j - 1, k)])
+                        .wrapping_add(s[at(i, j, k - 1)])
+                        .wrapping_sub(s[at(i - 1, j - 1, k)])
+                        .wrapping_sub(s[at(i - 1, j, k - 1)])
+                        .wrapping_sub(s[at(i, j - 1, k - 1)])
+                        .wrapping_add(s[at(i - 1, j - 1, k - 1)]);
+                }
+            }
+        }
+        Self { s, dims }
+    }
+
+    /// Whether a cell of the box `[x0, x1) x [y0, y1) x [z0, z1)` is inside.
+    fn any(
+        &self,
+        (x0, x1): (usize, usize),
+        (y0, y1): (usize, usize),
+        (z0, z1): (usize, usize),
+    ) -> bool {
+        let (nx, ny) = (self.dims[0] + 1, self.dims[1] + 1);
+        let s = |i: usize, j: usize, k: usize| self.s[i + nx * (j + ny * k)];
+        let n = s(x1, y1, z1)
+            .wrapping_sub(s(x0, y1, z1))
+            .wrapping_sub(s(x1, y0, z1))
+            .wrapping_sub(s(x1, y1, z0))
+            .wrapping_add(s(x0, y0, z1))
+            .wrapping_add(s(x0, y1, z0))
+            .wrapping_add(s(x1, y0, z0))
+            .wrapping_sub(s(x0, y0, z0));
+        n > 0
     }
 }
 

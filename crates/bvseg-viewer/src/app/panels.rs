@@ -28,18 +28,18 @@ impl ViewerApp {
             });
             note_widget("Mesh", menu.response.rect);
             let has_result = self.result().is_some();
-            ui.menu_button("Result", |ui| {
+            let menu = ui.menu_button("Result", |ui| {
                 for export in [Export::Json, Export::Glb] {
                     let label = export.menu_label();
-                    if ui
-                        .add_enabled(has_result, egui::Button::new(label))
-                        .clicked()
-                    {
+                    let button = ui.add_enabled(has_result, egui::Button::new(label));
+                    note_widget(label, button.rect);
+                    if button.clicked() {
                         self.export(export);
                         ui.close_menu();
                     }
                 }
             });
+            note_widget("Result", menu.response.rect);
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 ui.label(self.status_line());
             });

@@ -1,0 +1,67 @@
+//! The work of loading and segmenting a file grows at most linearly with the file, for every
+//! family of awkward inputs in `support/hostile.rs`. Work is counted, not timed
+//! (`bvseg::work`: lattice columns scanned by the inside test, points fitted, outside cells
+//! counted, vertices and triangles read), so the test is exact on any machine; wall times
+//! are in `benches/hostile.rs`.
+//!
+//! One test function, so that nothing else in this process adds to the counter meanwhile.
+#[path = "support/hostile.rs"]
+mod hostile;
+
+use bvseg::{segment, Params};
+
+/// Largest extra work per extra byte of input between the two sizes of a family. Loading
+/// costs a few units per byte; the first versions of the inside test, which rasterised every
+/// copy of a repeated face, cost over a thousand.
+const UNITS_PER_BYTE: f64 = 8.0;
+
+/// Loads and segments one file; the work it took and whether it was refused.
+fn work(bytes: &[u8], name: &str) -> (u64, Result<(), String>) {
+    let before = bvseg::work::total();
+    let outcome = bvseg::io::load_mesh_from_bytes(bytes, name)
+        .map_err(|e| e.to_string())
+        .and_then(|loaded| {
+            let params = Params {
+                samples: 4_000,
+                ..Params::default()
+            };
+            segment(&loaded.mesh, &params)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        });
+    (bvseg::work::total() - before, outcome)
+}
+
+#[test]
+fn work_grows_at_most_linearly_with_the_input() {
+    let (mut report, mut failures) = (Vec::new(), Vec::new());
+    for &(family, build) in hostile::FAMILIES {
+        let (small, name_s) = build(5_000);
+        let (large, name_l) = build(20_000);
+        let (ws, rs) = work(&small, &name_s);
+        let (wl, rl) = work(&large, &name_l);
+        for (r, name) in [(&rs, &name_s), (&rl, &name_l)] {
+            if let Err(e) = r {
+                assert!(!e.contains('\n'), "{name}: a multi-line error: {e}");
+            }
+        }
+        let per_byte = (wl as f64 - ws as f64) / (large.len() - small.len()) as f64;
+        report.push(format!(
+            "{family}: {} B -> {ws} units ({}), {} B -> {wl} units ({}); {per_byte:.2} units per extra byte",
+            small.len(),
+            if rs.is_ok() { "segmented" } else { "refused" },
+            large.len(),
+            if rl.is_ok() { "segmented" } else { "refused" },
+        ));
+        // Linear: four times the input costs at most four times the work, and each byte
+        // adds a bounded amount.
+        if wl > 4 * ws.max(1) || per_byte > UNITS_PER_BYTE {
+            failures.push(family);
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "superlinear or too costly: {failures:?}"
+    );
+}
