@@ -5,15 +5,25 @@ mod fuzz_input;
 
 use std::path::Path;
 
+/// Runs `check` on every file of `fuzz/seeds/<target>/` and
+/// `tests/data/fuzz-regressions/<target>/`, in name order; returns how many there were.
+/// Fails when there are none: a replay that finds nothing checks nothing.
 fn replay(target: &str, check: impl Fn(&[u8])) -> usize {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/fuzz-regressions")
-        .join(target);
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        return 0;
-    };
-    let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut paths = Vec::new();
+    for dir in [
+        root.join("fuzz/seeds").join(target),
+        root.join("tests/data/fuzz-regressions").join(target),
+    ] {
+        if let Ok(entries) = std::fs::read_dir(&dir) {
+            paths.extend(entries.filter_map(|e| e.ok().map(|e| e.path())));
+        }
+    }
     paths.sort();
+    assert!(
+        !paths.is_empty(),
+        "no seeds or regression inputs for {target}"
+    );
     for p in &paths {
         eprintln!("replaying {}", p.display());
         check(&std::fs::read(p).expect("readable regression input"));
@@ -60,10 +70,14 @@ fn gltf_and_stl_seeds_load() {
 
 #[test]
 fn pipeline_regressions() {
+    let decoded = std::sync::atomic::AtomicUsize::new(0);
     let n = replay("pipeline", |data| {
-        if let Some((mesh, params)) = fuzz_input::pipeline_case(data) {
-            fuzz_input::check_pipeline(&mesh, &params);
-        }
+        let (mesh, params) =
+            fuzz_input::pipeline_case(data).expect("every saved pipeline input decodes");
+        fuzz_input::check_pipeline(&mesh, &params);
+        decoded.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     });
-    assert!(n > 0, "the pipeline regressions are missing");
+    // Two seeds and at least the two saved slow units.
+    assert!(n >= 4, "only {n} pipeline inputs");
+    assert_eq!(decoded.into_inner(), n);
 }

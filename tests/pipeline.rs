@@ -187,3 +187,79 @@ fn same_seed_gives_identical_results_on_one_and_two_threads() {
     let c = run(2);
     assert_eq!(b, c);
 }
+
+/// Float32 inputs: the volumes enclose the mesh as read. A mesh stored in f32 (STL, glTF)
+/// is that rounding of the modeller's f64 mesh; `margin` grows every volume by at least the
+/// rounding, so the f64 original stays enclosed too.
+#[test]
+fn a_margin_keeps_the_f64_original_of_an_f32_mesh_enclosed() {
+    // Far from the origin, so that f32 rounding is large against the mesh (ulp 2^-10 at 1000).
+    let rot = DMat3::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1);
+    let original = ellipsoid(
+        DVec3::new(1000.1, -1500.3, 700.7),
+        DVec3::new(3.0, 1.5, 1.0),
+        rot,
+        24,
+    );
+    let rounded: Vec<DVec3> = original
+        .vertices()
+        .iter()
+        .map(|v| v.as_vec3().as_dvec3())
+        .collect();
+    let err = original
+        .vertices()
+        .iter()
+        .zip(&rounded)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0, f64::max);
+    assert!(err > 1e-5, "the rounding should matter here ({err})");
+    let mesh32 = Mesh::new(rounded, original.triangles().to_vec()).expect("valid mesh");
+    let escapes = |seg: &Segmentation| {
+        (0..original.triangles().len())
+            .filter(|&t| {
+                let v = &seg.parts[seg.triangle_parts[t] as usize].volume;
+                original.corners(t).iter().any(|&c| !v.contains(c))
+            })
+            .count()
+    };
+    let params = Params {
+        samples: 3_000,
+        k: Some(6),
+        bounding: BoundingKind::Mixed,
+        ..Params::default()
+    };
+    let plain = segment(&mesh32, &params).expect("segments");
+    let grid = Grid::from_mesh(&mesh32, params.samples).expect("grid");
+    assert_encloses(&mesh32, &plain, &grid);
+    assert!(
+        escapes(&plain) > 0,
+        "without a margin some f64 corner should fall outside (the test would prove nothing)"
+    );
+    let margin = Params {
+        margin: 2.0 * err,
+        ..params
+    };
+    let grown = segment(&mesh32, &margin).expect("segments");
+    assert_eq!(escapes(&grown), 0, "a margin of twice the rounding error");
+    // The hierarchy's volumes grow too: the root holds every original vertex.
+    let root = &grown.hierarchy.last().expect("a root").volume;
+    assert!(original.vertices().iter().all(|&v| root.contains(v)));
+    assert!(grown.metrics.tov >= plain.metrics.tov);
+}
+
+#[test]
+fn a_cancelled_run_ends_with_cancelled() {
+    let mesh = bundled("bunny.obj");
+    let cancel = bvseg::Cancel::new();
+    let mut seg =
+        bvseg::Segmenter::with_cancel(&mesh, &Params::default(), cancel.clone()).expect("samples");
+    assert!(seg.step().is_some());
+    cancel.cancel();
+    assert_eq!(seg.step(), None);
+    assert_eq!(seg.finish().err(), Some(bvseg::Error::Cancelled));
+    // Set before the run: it does not even sample.
+    assert_eq!(
+        bvseg::Segmenter::with_cancel(&mesh, &Params::default(), cancel).err(),
+        Some(bvseg::Error::Cancelled)
+    );
+}

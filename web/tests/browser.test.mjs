@@ -204,6 +204,28 @@ test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async 
   await page.close();
 });
 
+test(`the page's JSON for ${MESH} is byte-identical to the CLI's`, async () => {
+  const cli = join(here, 'cli-json', `${MESH}.json`);
+  assert.ok(existsSync(cli), `${cli} is missing: web/test.sh writes it with the CLI`);
+  const { page, title, logs } = await runPage(`mesh=${MESH}&autorun=1`);
+  assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
+  const click = async (label) => {
+    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+    assert.equal(r.length, 4, `no widget "${label}"`);
+    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+    await page.waitForTimeout(300);
+  };
+  await click('Result');
+  const download = page.waitForEvent('download', { timeout: 10_000 });
+  await click('Download JSON');
+  const file = await (await download).path();
+  const fromPage = readFileSync(file);
+  const fromCli = readFileSync(cli);
+  assert.ok(fromPage.equals(fromCli), `the page's ${fromPage.length} bytes differ from the CLI's ${fromCli.length}`);
+  console.log(`# ${MESH}: the page's volumes JSON equals the CLI's, ${fromCli.length} bytes`);
+  await page.close();
+});
+
 test('clicking the controls in the page runs with them', async () => {
   const page = await context.newPage();
   await page.goto(`${base}/index.html?mesh=bunny`);

@@ -254,3 +254,68 @@ fn usage_errors_exit_2() {
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("bvseg "));
 }
+
+#[test]
+fn timeout_exits_2_and_writes_nothing() {
+    let dir = scratch("timeout_exits_2_and_writes_nothing");
+    // The default sample count: far more than a millisecond of work.
+    let o = bvseg(
+        &dir,
+        &[
+            "segment",
+            "--timeout",
+            "0.001",
+            "-o",
+            "v.json",
+            "-o",
+            "v.glb",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("--timeout"), "{err}");
+    assert!(files(&dir).is_empty(), "{:?}", files(&dir));
+    // A generous timeout changes nothing.
+    let o = segment(&dir, &["--timeout", "600", "-o", "v.json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for bad in ["0", "-1", "nan", "soon"] {
+        let o = segment(&dir, &["--timeout", bad]);
+        assert_eq!(o.status.code(), Some(2), "--timeout {bad}");
+    }
+}
+
+#[test]
+fn margin_grows_the_volumes() {
+    let dir = scratch("margin_grows_the_volumes");
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&fs::read_to_string(dir.join(name)).unwrap()).unwrap()
+    };
+    let o = segment(&dir, &["--k", "4", "--bv", "obb", "-o", "a.json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = segment(
+        &dir,
+        &[
+            "--k", "4", "--bv", "obb", "--margin", "0.01", "-o", "b.json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let (a, b) = (read("a.json"), read("b.json"));
+    for (va, vb) in a["volumes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b["volumes"].as_array().unwrap())
+    {
+        for j in 0..3 {
+            let (ra, rb) = (
+                va["radii"][j].as_f64().unwrap(),
+                vb["radii"][j].as_f64().unwrap(),
+            );
+            assert!((rb - ra - 0.01).abs() < 1e-12, "{ra} -> {rb}");
+        }
+    }
+    let o = segment(&dir, &["--margin", "-1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

@@ -111,6 +111,21 @@ impl BoundingVolume {
         self
     }
 
+    /// A digest of the exact bits of the volume (FNV-1a over centre, axes and radii), for
+    /// tests that results are the same on every platform and thread count.
+    #[doc(hidden)]
+    pub fn bits_digest(&self) -> u64 {
+        let words = self
+            .center
+            .to_array()
+            .into_iter()
+            .chain(self.axes.to_cols_array())
+            .chain(self.radii.to_array());
+        words.fold(0xcbf2_9ce4_8422_2325, |h, x| {
+            (h ^ x.to_bits()).wrapping_mul(0x0100_0000_01b3)
+        })
+    }
+
     /// Axis-aligned bounding box `(min, max)`.
     pub fn aabb(&self) -> (DVec3, DVec3) {
         let a = self.axes;

@@ -944,7 +944,7 @@ fn invert<const N: usize>(mut m: [[f64; N]; N]) -> Option<[[f64; N]; N]> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::rng::Rng;
     use glam::EulerRot;
@@ -1172,10 +1172,35 @@ mod tests {
         assert_eq!((e.center, e.radii), (DVec3::ZERO, DVec3::splat(0.5)));
     }
 
+    /// Points from arithmetic alone (no transcendental), so the input is the same everywhere.
+    pub(crate) fn portable_blob(seed: u64, n: usize) -> Vec<DVec3> {
+        let mut rng = Rng::new(seed);
+        (0..n)
+            .map(|_| {
+                let [x, y, z] = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
+                DVec3::new(3.0 * x + y, y - 0.5 * z, 0.4 * z * (1.0 + x)) + DVec3::splat(7.0)
+            })
+            .collect()
+    }
+
+    /// The fit's exact bits, recorded once: the same on every platform (the MVEE's `ln` and
+    /// `powf` come from libm, see `crate::math`) and on every thread. `.ci/run` also runs
+    /// this test compiled for wasm32 (`scripts/wasm_tests.sh`). A change here means either
+    /// the platform's maths leaks into the result, or an intended change of the fit (then
+    /// record the new digest, and say so).
     #[test]
-    fn deterministic() {
-        let mut rng = Rng::new(2);
-        let pts = blob(&mut rng, 2000);
-        assert_eq!(mvee(&pts, 1e-3, 1e-6), mvee(&pts, 1e-3, 1e-6));
+    fn same_bits_on_every_platform_and_thread() {
+        const GOLDEN: u64 = 0x1ae3_c966_eb19_c84d;
+        let pts = portable_blob(2, 2000);
+        let digest = || mvee(&pts, 1e-4, 1e-6).bits_digest();
+        let here = digest();
+        #[cfg(not(target_family = "wasm"))]
+        std::thread::scope(|s| {
+            let runs: Vec<_> = (0..4).map(|_| s.spawn(digest)).collect();
+            for r in runs {
+                assert_eq!(r.join().ok(), Some(here));
+            }
+        });
+        assert_eq!(here, GOLDEN, "MVEE digest {here:#x}");
     }
 }

@@ -662,10 +662,22 @@ pub(crate) mod tests {
         pts
     }
 
+    /// The box's exact bits, recorded once: the same on every platform (its rotations' sines
+    /// come from libm) and thread. See the MVEE's test of the same name.
     #[test]
-    fn deterministic() {
-        let pts = point_set(1, 9, 2000);
-        assert_eq!(min_obb(&pts, 1e-6), min_obb(&pts, 1e-6));
+    fn same_bits_on_every_platform_and_thread() {
+        const GOLDEN: u64 = 0x7733_9282_9388_d09b;
+        let pts = crate::bounding::mvee::tests::portable_blob(9, 2000);
+        let digest = || min_obb(&pts, 1e-6).bits_digest();
+        let here = digest();
+        #[cfg(not(target_family = "wasm"))]
+        std::thread::scope(|s| {
+            let runs: Vec<_> = (0..4).map(|_| s.spawn(digest)).collect();
+            for r in runs {
+                assert_eq!(r.join().ok(), Some(here));
+            }
+        });
+        assert_eq!(here, GOLDEN, "OBB digest {here:#x}");
     }
 
     #[test]
