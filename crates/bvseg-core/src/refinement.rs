@@ -141,15 +141,22 @@ pub struct Segmenter {
 }
 
 /// The run's bound on optional work, in outside cells counted by its fits: this many per
-/// sample, plus [`WORK_PER_CELL`] per lattice cell. The shared meshes use under 5 % of it;
+/// sample, plus [`WORK_PER_CELL`] per lattice cell. The 24 bundled and shared meshes use at most 27 % of it (chair_1, `--max-k 128`), most under 15 %;
 /// a solid of many specks scattered across a large box, whose parts must each span several
 /// of them, makes every fit count a large share of the lattice, and would take minutes.
 /// Once it is spent, refinement, merging and the polish stop where they are: the result is
 /// the partition reached, with its volumes (still enclosing everything), measured.
-pub const WORK_PER_SAMPLE: u64 = 2000;
+pub const WORK_PER_SAMPLE: u64 = 1000;
 
 /// See [`WORK_PER_SAMPLE`].
 pub const WORK_PER_CELL: u64 = 8;
+
+/// The bound on optional work for `solid` (see [`WORK_PER_SAMPLE`]); the fits and the
+/// reshaping have one each.
+fn work_budget(solid: &Solid) -> u64 {
+    let g = &solid.grid;
+    WORK_PER_SAMPLE * g.len() as u64 + WORK_PER_CELL * (g.dims[0] * g.dims[1] * g.dims[2]) as u64
+}
 
 /// Candidate merges fitted at a time: each fit holds its outside cells until it is judged.
 const MERGE_CHUNK: usize = 16;
@@ -184,9 +191,8 @@ impl Segmenter {
             )));
         }
         let (comps, ncomp) = solid_components(&grid);
-        let budget = WORK_PER_SAMPLE * grid.len() as u64
-            + WORK_PER_CELL * (grid.dims[0] * grid.dims[1] * grid.dims[2]) as u64;
         let solid = Solid::new(grid);
+        let budget = work_budget(&solid);
         let fitter = Fitter::with_budget(mesh, &solid, params.bounding, budget, cancel.clone());
         Ok(Self {
             mesh: mesh.clone(),
@@ -647,6 +653,11 @@ impl Segmenter {
         best.and_then(|(_, _, a, b)| self.merged_state(a, b))
     }
 
+    /// The bound on the run's optional work (see [`WORK_PER_SAMPLE`]).
+    fn work_budget(&self) -> u64 {
+        work_budget(&self.solid)
+    }
+
     /// Whether the work bound is spent (see [`WORK_PER_SAMPLE`]); if so, the run moves on
     /// to its final step.
     fn out_of_work(&mut self) -> bool {
@@ -701,7 +712,15 @@ impl Segmenter {
         let min_r = 0.5 * self.solid.grid.h;
         let counts: Vec<f64> = cur.part.parts.iter().map(|m| m.n).collect();
         let cells = cur.fits.iter().map(|f| f.outside.clone()).collect();
-        let (volumes, cells) = reshape(&self.solid, &points, &cur.volumes, cells, &counts, min_r);
+        let (volumes, cells) = reshape(
+            &self.solid,
+            &points,
+            &cur.volumes,
+            cells,
+            &counts,
+            min_r,
+            self.work_budget(),
+        );
         let cells: Vec<&[[i64; 3]]> = cells.iter().map(Vec::as_slice).collect();
         let o = outside_from_cells(&cells, &counts);
         State {

@@ -22,6 +22,8 @@
 //! per cent of TOV at k = 32, up to 16 % on the chair's bars and slabs (see BENCHMARKS.md).
 use glam::{DMat3, DQuat, DVec3};
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use crate::math;
 
 use crate::metrics::{outside_cells, outside_cells_while, relative, LATTICES};
@@ -43,8 +45,10 @@ const MIN_SEMI_AXIS_CELLS: f64 = 1.5;
 /// Reshape the ellipsoids among `volumes` (boxes are kept as they are). `points[i]` are the
 /// points volume `i` must hold (its part's enclosure or convex-hull points), `cells[i]` its
 /// outside cells (see [`outside_cells`]), `counts[i]` the number of samples in its part;
-/// `min_r` is the smallest semi-axis allowed. Returns the new volumes and their outside
-/// cells, in the same order.
+/// `min_r` is the smallest semi-axis allowed. The trials may visit `budget` outside cells in
+/// all: the search stops, keeping the best volume so far, at the end of the round that spent
+/// it (a volume spanning a lattice of mostly empty cells would otherwise take seconds per
+/// round). Returns the new volumes and their outside cells, in the same order.
 pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
@@ -52,8 +56,13 @@ pub fn reshape(
     mut cells: Vec<Vec<[i64; 3]>>,
     counts: &[f64],
     min_r: f64,
+    budget: u64,
 ) -> (Vec<BoundingVolume>, Vec<Vec<[i64; 3]>>) {
     let grid = &solid.grid;
+    // Cells the trials visited. Each trial's count is fixed by its volume and the round's
+    // best, so the total after a round does not depend on the thread count.
+    let visited = AtomicU64::new(0);
+    let spent = || visited.load(Ordering::Relaxed) > budget;
     let mov = cells
         .iter()
         .zip(counts)
@@ -65,6 +74,9 @@ pub fn reshape(
     }
     let mut out = volumes.to_vec();
     for i in 0..volumes.len() {
+        if spent() {
+            break;
+        }
         let thin = volumes[i].radii.min_element() < MIN_SEMI_AXIS_CELLS * grid.h;
         if volumes[i].shape != Shape::Ellipsoid || points[i].is_empty() || thin {
             continue;
@@ -90,9 +102,10 @@ pub fn reshape(
                 }
                 own <= own_limit && marginal <= bound
             });
+            visited.fetch_add(own as u64, Ordering::Relaxed);
             complete.then_some((marginal, own))
         };
-        let v = search(points[i], &volumes[i], min_r, score);
+        let v = search(points[i], &volumes[i], min_r, score, &spent);
         cells[i] = outside_cells(grid, &v);
         cov.add(&cells[i]);
         out[i] = v;
@@ -129,6 +142,7 @@ fn search(
     start: &BoundingVolume,
     min_r: f64,
     score: impl Fn(&BoundingVolume, usize) -> Option<(usize, usize)> + Sync + Send,
+    spent: &dyn Fn() -> bool,
 ) -> BoundingVolume {
     let Some(mut best_s) = score(start, usize::MAX) else {
         return *start;
@@ -141,7 +155,7 @@ fn search(
     let mut trials = 0usize;
     let mut level = 0;
     let moves: Vec<(usize, f64)> = (0..9).flat_map(|d| [(d, 1.0), (d, -1.0)]).collect();
-    while level < LEVELS && trials < MAX_TRIALS && best_s.0 > 0 {
+    while level < LEVELS && trials < MAX_TRIALS && best_s.0 > 0 && !spent() {
         let from = best;
         let trial = |&(dim, sign): &(usize, f64)| {
             let (mut c, mut axes, mut radii) = (from.center, from.axes, from.radii);
@@ -214,7 +228,7 @@ mod tests {
         let mvee = crate::bounding::mvee::mvee_of_hull(&hull, 1e-4, 0.5);
         let before = outside_volumes(g, &[mvee], &[n]).ov[0];
         let cells = vec![outside_cells(g, &mvee)];
-        let after_v = reshape(&solid, &[&hull], &[mvee], cells, &[n], 0.5).0[0];
+        let after_v = reshape(&solid, &[&hull], &[mvee], cells, &[n], 0.5, u64::MAX).0[0];
         let after = outside_volumes(g, &[after_v], &[n]).ov[0];
         // The minimum-volume ellipsoid bulges by about 1/3 (more on the lattice); the reshaped
         // one reaches along the cylinder and bulges far less.
@@ -252,7 +266,15 @@ mod tests {
         let counts = [a.len() as f64, b.len() as f64];
         let before = outside_volumes(g, &[va, vb], &counts);
         let cells = vec![outside_cells(g, &va), outside_cells(g, &vb)];
-        let (new, _) = reshape(&solid, &[&ha, &hb], &[va, vb], cells, &counts, 0.5);
+        let (new, _) = reshape(
+            &solid,
+            &[&ha, &hb],
+            &[va, vb],
+            cells,
+            &counts,
+            0.5,
+            u64::MAX,
+        );
         let after = outside_volumes(g, &new, &counts);
         // The bars' volumes can reach along them into each other's space (measured: TOV
         // 0.736 -> 0.707).
