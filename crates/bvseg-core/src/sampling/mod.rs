@@ -70,14 +70,20 @@ impl Grid {
         let mut h = math::cbrt(vol / target);
         // Keep the lattice bounded whatever the shape: at most ~64x the target in cells.
         let max_cells = 64.0 * target + 1e6;
-        // One bound on the inside tests' work for all the lattices tried.
-        let mut budget = inside::column_budget(max_cells);
+        // One bound on the inside tests' work for the lattices tried, renewed for a coarser
+        // retry: a coarser lattice has fewer columns, so it costs less than the last one did,
+        // and too many samples cost more downstream than the retry does.
+        let full = inside::column_budget(max_cells);
+        let mut budget = full;
         let mut grid = Self::from_mesh_with_h(mesh, h, max_cells, &mut budget)?;
         for _ in 0..3 {
             let n = grid.points.len() as f64;
             let ratio = n / target;
             if (0.85..=1.15).contains(&ratio) {
                 break;
+            }
+            if ratio > 1.0 {
+                budget = full;
             }
             // A thin solid can hide between cell centres: shrink h until it shows up.
             h *= if n == 0.0 { 0.25 } else { math::cbrt(ratio) };
