@@ -141,9 +141,10 @@ pub struct Segmenter {
 }
 
 /// The run's bound on optional work, in outside cells counted by its fits: this many per
-/// sample, plus [`WORK_PER_CELL`] per lattice cell. The 24 bundled and shared meshes use at most 27 % of it (chair_1, `--max-k 128`), most under 15 %;
-/// a solid of many specks scattered across a large box, whose parts must each span several
-/// of them, makes every fit count a large share of the lattice, and would take minutes.
+/// sample, plus [`WORK_PER_CELL`] per lattice cell. The 24 bundled and shared meshes use at
+/// most 27 % of it (chair_1, `--max-k 128`), most under 15 %; a solid of many specks
+/// scattered across a large box, whose parts must each span several of them, makes every fit
+/// count a large share of the lattice, and would take minutes.
 /// Once it is spent, refinement, merging and the polish stop where they are: the result is
 /// the partition reached, with its volumes (still enclosing everything), measured.
 pub const WORK_PER_SAMPLE: u64 = 1000;

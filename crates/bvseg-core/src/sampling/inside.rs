@@ -14,9 +14,9 @@
 //! cavity (winding 0) while an inner shell of the same orientation stays solid (winding 2).
 //!
 //! Each triangle only touches the columns its projection covers, so it is rasterised over
-//! the column lattice (row by row, over the columns near its projection) and each crossing is added to a
-//! difference array shaped like the lattice, with one extra layer along the column axis for
-//! crossings past the far end. A prefix sum along the axis turns it into windings; the extra
+//! the column lattice (row by row, over the columns near its projection) and each crossing
+//! is added to a difference array shaped like the lattice, with one extra layer along the
+//! column axis for crossings past the far end. A prefix sum along the axis turns it into windings; the extra
 //! layer then holds each column's total. Cost is O(triangles + covered columns + cells), with
 //! no per-column allocation.
 //!
