@@ -4,8 +4,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// A flag that ends a run early when set: pass a clone to [`crate::Segmenter::with_cancel`]
-/// (or [`crate::segment_cancellable`]) and call [`Cancel::cancel`] from any thread, for
-/// example from a timer for a wall-time budget. The run then ends with
+/// and call [`Cancel::cancel`] from any thread, for example from a timer for a wall-time
+/// budget. The run then ends with
 /// [`crate::Error::Cancelled`] at its next check, within a fraction of a second on meshes of
 /// ordinary size. Cloning shares the flag.
 #[derive(Debug, Clone, Default)]
