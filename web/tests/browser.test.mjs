@@ -96,6 +96,15 @@ async function runPage(query) {
   return { page, title, text, seconds, logs };
 }
 
+/** Clicks the widget the app says it drew under `label` (eframe's web backend has no
+ * accessibility tree), then lets egui take the click in its next frame. */
+async function clickWidget(page, label) {
+  const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
+  assert.equal(r.length, 4, `no widget "${label}"`);
+  await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
+  await page.waitForTimeout(300);
+}
+
 /** Decodes an 8-bit, non-interlaced RGB or RGBA PNG (what Chromium's screenshots are). */
 function decodePng(buf) {
   assert.equal(buf.readUInt32BE(0), 0x89504e47, 'not a PNG');
@@ -209,12 +218,7 @@ test(`the page's JSON for ${MESH} is byte-identical to the CLI's`, async () => {
   assert.ok(existsSync(cli), `${cli} is missing: web/test.sh writes it with the CLI`);
   const { page, title, logs } = await runPage(`mesh=${MESH}&autorun=1`);
   assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
-  const click = async (label) => {
-    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
-    assert.equal(r.length, 4, `no widget "${label}"`);
-    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
-    await page.waitForTimeout(300);
-  };
+  const click = (label) => clickWidget(page, label);
   await click('Result');
   const download = page.waitForEvent('download', { timeout: 10_000 });
   await click('Download JSON');
@@ -233,13 +237,7 @@ test('clicking the controls in the page runs with them', async () => {
   await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Run'), null, {
     timeout: 60_000,
   });
-  const click = async (label) => {
-    const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
-    assert.equal(r.length, 4, `no widget "${label}"`);
-    await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
-    // Let egui take the click in its next frame.
-    await page.waitForTimeout(300);
-  };
+  const click = (label) => clickWidget(page, label);
   await click('Boxes');
   await click('Fixed k');
   assert.equal(await page.title(), 'bvseg', 'nothing ran yet');
@@ -325,12 +323,7 @@ for (const [name, bytes] of [['brick.obj', brickObj], ['brick.glb', brickGlb], [
     await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Mesh'), null, {
       timeout: 60_000,
     });
-    const click = async (label) => {
-      const r = await page.evaluate((l) => Array.from(window.bvseg.widgetRect(l) || []), label);
-      assert.equal(r.length, 4, `no widget "${label}"`);
-      await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
-      await page.waitForTimeout(300);
-    };
+    const click = (label) => clickWidget(page, label);
     await click('Mesh');
     const chooser = page.waitForEvent('filechooser', { timeout: 10_000 });
     await click('Open file…');

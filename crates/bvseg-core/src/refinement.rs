@@ -33,7 +33,7 @@ use std::sync::Arc;
 use crate::fitting::{Fit, Fitter};
 use crate::flooding::{connected_merges, solid_components};
 use crate::initialization::{cvt, split};
-use crate::metrics::{outside_from_cells, outside_volumes, relative};
+use crate::metrics::{outside_from_cells, outside_volumes, relative, Outside};
 use crate::moments::Moments;
 use crate::optimization::optimize;
 use crate::parallel::{join, threads};
@@ -107,6 +107,19 @@ struct State {
     tov: f64,
     mov: f64,
     ov: Vec<f64>,
+}
+
+impl State {
+    /// The same partition with other volumes, measured as `o`.
+    fn with_volumes(self, volumes: Vec<BoundingVolume>, o: Outside) -> Self {
+        State {
+            volumes,
+            tov: o.tov,
+            mov: o.mov,
+            ov: o.ov,
+            ..self
+        }
+    }
 }
 
 /// The segmentation as a sequence of steps, for progress display and interactive use: call
@@ -723,14 +736,7 @@ impl Segmenter {
             self.work_budget(),
         );
         let cells: Vec<&[[i64; 3]]> = cells.iter().map(Vec::as_slice).collect();
-        let o = outside_from_cells(&cells, &counts);
-        State {
-            volumes,
-            tov: o.tov,
-            mov: o.mov,
-            ov: o.ov,
-            ..cur
-        }
+        cur.with_volumes(volumes, outside_from_cells(&cells, &counts))
     }
 
     /// `cur` with every volume grown by the margin ([`Params::margin`]), measured again.
@@ -745,13 +751,7 @@ impl Segmenter {
             .collect();
         let counts: Vec<f64> = cur.part.parts.iter().map(|m| m.n).collect();
         let o = outside_volumes(&self.solid.grid, &volumes, &counts);
-        State {
-            volumes,
-            tov: o.tov,
-            mov: o.mov,
-            ov: o.ov,
-            ..cur
-        }
+        cur.with_volumes(volumes, o)
     }
 
     fn finalize(&mut self) -> Step {

@@ -1183,6 +1183,20 @@ pub(crate) mod tests {
             .collect()
     }
 
+    /// `digest()`, after checking that four threads running it at once get the same (on
+    /// targets with threads).
+    pub(crate) fn same_on_threads(digest: impl Fn() -> u64 + Sync) -> u64 {
+        let here = digest();
+        #[cfg(not(target_family = "wasm"))]
+        std::thread::scope(|s| {
+            let runs: Vec<_> = (0..4).map(|_| s.spawn(&digest)).collect();
+            for r in runs {
+                assert_eq!(r.join().ok(), Some(here));
+            }
+        });
+        here
+    }
+
     /// The fit's exact bits, recorded once: the same on every platform (the MVEE's `ln` and
     /// `powf` come from libm, see `crate::math`) and on every thread. `.ci/run` also runs
     /// this test compiled for wasm32 (`scripts/wasm_tests.sh`). A change here means either
@@ -1192,15 +1206,7 @@ pub(crate) mod tests {
     fn same_bits_on_every_platform_and_thread() {
         const GOLDEN: u64 = 0x1ae3_c966_eb19_c84d;
         let pts = portable_blob(2, 2000);
-        let digest = || mvee(&pts, 1e-4, 1e-6).bits_digest();
-        let here = digest();
-        #[cfg(not(target_family = "wasm"))]
-        std::thread::scope(|s| {
-            let runs: Vec<_> = (0..4).map(|_| s.spawn(digest)).collect();
-            for r in runs {
-                assert_eq!(r.join().ok(), Some(here));
-            }
-        });
+        let here = same_on_threads(|| mvee(&pts, 1e-4, 1e-6).bits_digest());
         assert_eq!(here, GOLDEN, "MVEE digest {here:#x}");
     }
 }

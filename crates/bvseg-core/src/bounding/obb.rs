@@ -668,15 +668,8 @@ pub(crate) mod tests {
     fn same_bits_on_every_platform_and_thread() {
         const GOLDEN: u64 = 0x7733_9282_9388_d09b;
         let pts = crate::bounding::mvee::tests::portable_blob(9, 2000);
-        let digest = || min_obb(&pts, 1e-6).bits_digest();
-        let here = digest();
-        #[cfg(not(target_family = "wasm"))]
-        std::thread::scope(|s| {
-            let runs: Vec<_> = (0..4).map(|_| s.spawn(digest)).collect();
-            for r in runs {
-                assert_eq!(r.join().ok(), Some(here));
-            }
-        });
+        let here =
+            crate::bounding::mvee::tests::same_on_threads(|| min_obb(&pts, 1e-6).bits_digest());
         assert_eq!(here, GOLDEN, "OBB digest {here:#x}");
     }
 
