@@ -118,3 +118,17 @@ pub struct Segmentation {
     /// large box, not on ordinary models.
     pub budget_exhausted: bool,
 }
+
+impl Segmentation {
+    /// Whether a tolerance-mode run (`params.k == None`) met its tolerances: TOV below
+    /// `params.tov` and MOV below `params.mov`. `None` for a run with a fixed k, which has no
+    /// tolerances to meet. The one rule the CLI, the summary and the viewer share.
+    #[must_use]
+    pub fn tolerances_met(&self, params: &crate::Params) -> Option<bool> {
+        let m = self.metrics;
+        params
+            .k
+            .is_none()
+            .then_some(m.tov < params.tov && m.mov < params.mov)
+    }
+}
