@@ -29,7 +29,9 @@ struct Case {
 }
 
 fn case(path: &Path) -> Option<Case> {
-    let mesh = bvseg::io::load_obj(path).ok()?;
+    let mesh = bvseg::io::load(path, &bvseg::io::LoadOptions::default())
+        .ok()?
+        .mesh;
     let grid = Grid::from_mesh(&mesh, 20_000).ok()?;
     let solid = Solid::new(grid);
     let (comps, ncomp) = bvseg::flooding::solid_components(&solid.grid);

@@ -45,7 +45,9 @@ fn asset(name: &str) -> PathBuf {
 }
 
 fn load(path: &Path) -> Mesh {
-    bvseg::io::load_obj(path).unwrap_or_else(|e| panic!("loading {}: {e}", path.display()))
+    bvseg::io::load(path, &bvseg::io::LoadOptions::default())
+        .unwrap_or_else(|e| panic!("loading {}: {e}", path.display()))
+        .mesh
 }
 
 fn bunny() -> Mesh {

@@ -4,3 +4,8 @@
 //! the core ([`bvseg_core`], pure computation) and the I/O crate ([`bvseg_io`]).
 pub use bvseg_core::*;
 pub use bvseg_io as io;
+
+// The README's Rust examples are compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

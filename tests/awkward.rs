@@ -1,21 +1,24 @@
 //! The awkward shapes: each is segmented, its enclosure is checked by the independent
-//! verifier (`bvseg::verify`), and its tightness against a bound that a sound result meets
-//! with room to spare.
-use bvseg::verify::{verify, VerifyOptions, VerifyReport};
+//! verifier (`bvseg-verify`, on the written volumes file), and its tightness against a bound
+//! that a sound result meets with room to spare.
+#[path = "support/verify_input.rs"]
+mod verify_input;
+
 use bvseg::{segment, shapes, BoundingKind, Error, Mesh, Params, Segmentation};
+use bvseg_verify::{VerifyOptions, VerifyReport};
 use glam::{DMat3, DVec3};
 
 /// Segments `mesh`, asserts that the verifier finds every triangle enclosed, and returns the
 /// result with the verifier's report (TOV measured independently).
 fn run(name: &str, mesh: &Mesh, params: &Params) -> (Segmentation, VerifyReport) {
     let seg = segment(mesh, params).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let vols: Vec<_> = seg.parts.iter().map(|p| p.volume).collect();
+    // The file carries the fractions, hence the per-part figures.
     let opts = VerifyOptions {
         points: 200_000,
-        fractions: Some(seg.parts.iter().map(|p| p.fraction).collect()),
         ..VerifyOptions::default()
     };
-    let r = verify(mesh, &vols, &opts).unwrap_or_else(|e| panic!("{name}: verify: {e}"));
+    let r = verify_input::verify_segmentation(mesh, &seg, &opts)
+        .unwrap_or_else(|e| panic!("{name}: verify: {e}"));
     assert!(
         r.all_enclosed(),
         "{name}: {} of {} triangles escape (max {:.3e} x diagonal)",

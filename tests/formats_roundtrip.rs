@@ -1,18 +1,10 @@
 //! The same solid as OBJ, as STL and as GLB under a non-trivial node transform gives the same
 //! volumes, up to that transform.
 use std::fs;
-use std::path::{Path, PathBuf};
 
 use bvseg::shapes::{capsule, ellipsoid, union};
 use bvseg::{segment, BoundingKind, Mesh, Params, Segmentation};
 use glam::{DMat3, DMat4, DQuat, DVec3};
-
-fn scratch() -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bvseg-formats-roundtrip");
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A dumbbell whose vertices are multiples of 2^-10, so that f32 (STL, glTF) and decimal
 /// text (OBJ) hold them exactly.
@@ -180,7 +172,7 @@ fn assert_same_volumes(a: &Segmentation, xf: &DMat4, scale: f64, b: &Segmentatio
 
 #[test]
 fn obj_stl_and_transformed_glb_give_the_same_volumes() {
-    let dir = scratch();
+    let dir = bvseg_testkit::scratch("obj_stl_and_transformed_glb_give_the_same_volumes");
     let mesh = dumbbell();
     fs::write(dir.join("d.obj"), write_obj(&mesh)).unwrap();
     fs::write(dir.join("d.stl"), write_stl(&mesh)).unwrap();
@@ -202,9 +194,12 @@ fn obj_stl_and_transformed_glb_give_the_same_volumes() {
     fs::write(dir.join("d.glb"), write_glb(&mesh, &child, parent)).unwrap();
     let xf = DMat4::from_translation(parent) * child;
 
-    let obj = bvseg::io::load_mesh(dir.join("d.obj")).unwrap();
-    let stl = bvseg::io::load_mesh(dir.join("d.stl")).unwrap();
-    let glb = bvseg::io::load_mesh(dir.join("d.glb")).unwrap();
+    let load = |f: &str| {
+        bvseg::io::load(dir.join(f), &bvseg::io::LoadOptions::default())
+            .unwrap()
+            .mesh
+    };
+    let (obj, stl, glb) = (load("d.obj"), load("d.stl"), load("d.glb"));
     // The readers agree exactly: STL equals OBJ, GLB equals the transformed OBJ.
     assert_eq!(obj, stl);
     // (The OBJ reader numbers vertices in order of first use, the glTF one keeps the

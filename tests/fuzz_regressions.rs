@@ -61,7 +61,7 @@ fn gltf_and_stl_seeds_load() {
     ] {
         for f in files {
             let bytes = std::fs::read(seeds.join(dir).join(f)).expect("seed present");
-            let loaded = bvseg_io::load_mesh_from_bytes(&bytes, f)
+            let loaded = bvseg_io::load_bytes(&bytes, f, &bvseg_io::LoadOptions::default())
                 .unwrap_or_else(|e| panic!("seed {f}: {e}"));
             assert_eq!(loaded.mesh.triangles().len(), 4, "{f}");
         }

@@ -18,7 +18,7 @@ const UNITS_PER_BYTE: f64 = 8.0;
 /// Loads and segments one file; the work it took and whether it was refused.
 fn work(bytes: &[u8], name: &str) -> (u64, Result<(), String>) {
     let before = bvseg::work::total();
-    let outcome = bvseg::io::load_mesh_from_bytes(bytes, name)
+    let outcome = bvseg::io::load_bytes(bytes, name, &bvseg::io::LoadOptions::default())
         .map_err(|e| e.to_string())
         .and_then(|loaded| {
             let params = Params {

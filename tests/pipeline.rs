@@ -6,8 +6,12 @@ use bvseg::{segment, BoundingKind, Mesh, Params, Segmentation};
 use glam::{DMat3, DVec3};
 
 fn bundled(name: &str) -> Mesh {
-    let path = format!("{}/assets/meshes/{name}", env!("CARGO_MANIFEST_DIR"));
-    bvseg::io::load_obj(&path).expect("bundled mesh loads")
+    bvseg::io::load(
+        bvseg_testkit::bundled_mesh(name),
+        &bvseg::io::LoadOptions::default(),
+    )
+    .expect("bundled mesh loads")
+    .mesh
 }
 
 /// Every triangle lies in the volume of its part (its three corners are inside, and the

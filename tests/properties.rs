@@ -3,14 +3,17 @@
 //!
 //! Case counts are small (each case runs whole segmentations); proptest shrinks any failure
 //! to a small reproducible case.
+#[path = "support/verify_input.rs"]
+mod verify_input;
+
 use bvseg::bounding::{legendre::fast_volume, mvee::mvee};
 use bvseg::flooding::solid_components;
 use bvseg::initialization::cvt;
 use bvseg::optimization::{lloyd, polish};
 use bvseg::partition::{Partition, Solid};
 use bvseg::sampling::{Grid, NONE};
-use bvseg::verify::{verify, VerifyOptions};
 use bvseg::{segment, shapes, BoundingKind, Mesh, Params, Segmentation, Shape};
+use bvseg_verify::VerifyOptions;
 use glam::{DMat3, DVec3};
 use proptest::prelude::*;
 
@@ -198,13 +201,12 @@ fn check_segmentation(
             );
         }
     }
-    // The union encloses the mesh, by the independent verifier.
-    let vols: Vec<_> = seg.parts.iter().map(|p| p.volume).collect();
+    // The union encloses the mesh, by the independent verifier, on the written file.
     let opts = VerifyOptions {
         points: 20_000,
         ..VerifyOptions::default()
     };
-    let r = verify(mesh, &vols, &opts).expect("verify runs");
+    let r = verify_input::verify_segmentation(mesh, seg, &opts).expect("verify runs");
     prop_assert!(
         r.all_enclosed(),
         "verify: {} escaping, max {}",
@@ -272,15 +274,13 @@ proptest! {
             max_k: 6,
             ..Params::default()
         };
-        let opts = VerifyOptions { points: 5000, ..VerifyOptions::default() };
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| {
-                let seg = segment(&mesh, &params).expect("segments");
-                let vols: Vec<_> = seg.parts.iter().map(|p| p.volume).collect();
-                let report = verify(&mesh, &vols, &opts).expect("verify runs");
-                (seg, report)
-            })
+            let seg = pool.install(|| segment(&mesh, &params).expect("segments"));
+            // The verifier runs on its own threads.
+            let opts = VerifyOptions { points: 5000, threads: Some(threads), ..VerifyOptions::default() };
+            let report = verify_input::verify_segmentation(&mesh, &seg, &opts).expect("verify runs");
+            (seg, report)
         };
         let (one, one_report) = run(1);
         let json = bvseg::io::to_json_string(&one);

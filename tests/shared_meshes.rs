@@ -35,7 +35,9 @@ fn check_folder(dir: &Path) -> usize {
     assert!(!paths.is_empty(), "no meshes in {}", dir.display());
     let count = paths.len();
     for path in paths {
-        let mesh = bvseg::io::load_obj(&path).expect("shared mesh loads");
+        let mesh = bvseg::io::load(&path, &bvseg::io::LoadOptions::default())
+            .expect("shared mesh loads")
+            .mesh;
         for bounding in [
             BoundingKind::Ellipsoid,
             BoundingKind::Obb,

@@ -2,8 +2,11 @@
 //! `fuzz/fuzz_targets/*.rs` and the regression replay (`tests/fuzz_regressions.rs`), so that
 //! a saved crashing input is replayed exactly as the fuzzer ran it.
 #![allow(dead_code)]
-use bvseg_core::verify::{verify, VerifyOptions};
-use bvseg_core::{segment, shapes, BoundingKind, Mesh, Params};
+#[path = "verify_input.rs"]
+mod verify_input;
+
+use bvseg_core::{segment, shapes, BoundingKind, Mesh, Params, Shape};
+use bvseg_verify::{VerifyOptions, Volume, Volumes};
 use glam::{DMat3, DVec3};
 
 /// Up to 16 vertices of 3 x i8 and up to 32 triangles of 3 index bytes.
@@ -77,7 +80,8 @@ pub fn pipeline_case(data: &[u8]) -> Option<(Mesh, Params)> {
 }
 
 /// Segments (errors are fine: bad input) and checks that every triangle is enclosed, by the
-/// segmentation's own assignment and by the independent verifier.
+/// segmentation's own assignment and by the independent verifier (on the written file,
+/// which it must accept).
 pub fn check_pipeline(mesh: &Mesh, params: &Params) {
     let Ok(seg) = segment(mesh, params) else {
         return;
@@ -95,15 +99,16 @@ pub fn check_pipeline(mesh: &Mesh, params: &Params) {
         points: 1000,
         ..VerifyOptions::default()
     };
-    if let Ok(r) = verify(mesh, &vols, &opts) {
+    if let Ok(r) = verify_input::verify_segmentation(mesh, &seg, &opts) {
         assert!(r.all_enclosed(), "verify: {r:?}");
     }
 }
 
 /// OBJ loading: a mesh or a one-line error.
 pub fn check_obj(data: &[u8]) {
-    match bvseg_io::load_obj_from_bytes(data, "fuzz.obj") {
-        Ok(mesh) => {
+    match bvseg_io::load_bytes(data, "fuzz.obj", &bvseg_io::LoadOptions::default()) {
+        Ok(loaded) => {
+            let mesh = loaded.mesh;
             let _ = mesh.bbox();
             let _ = mesh.signed_volume();
         }
@@ -111,17 +116,48 @@ pub fn check_obj(data: &[u8]) {
     }
 }
 
-/// The volumes reader, and the verifier on whatever it accepts.
+/// The volumes reader, the verifier's own reader (which must accept what the first accepts,
+/// and read the same volumes), and the verifier on whatever they accept.
 pub fn check_volumes_json(data: &[u8]) {
+    let theirs = std::str::from_utf8(data).map(Volumes::from_json);
+    if let Ok(Err(e)) = &theirs {
+        assert!(!e.to_string().contains('\n'), "multi-line error: {e}");
+    }
     match bvseg_io::parse_volumes(data, "fuzz.json") {
         Ok(file) => {
+            let volumes = match theirs {
+                Ok(Ok(v)) => v,
+                other => panic!("bvseg-io accepts, bvseg-verify does not: {other:?}"),
+            };
+            assert_eq!(volumes.fractions.as_ref(), Some(&file.fractions));
+            assert_eq!(volumes.volumes.len(), file.volumes.len());
+            for (v, w) in volumes.volumes.iter().zip(&file.volumes) {
+                let (shape, center, axes, radii) = match *v {
+                    Volume::Ellipsoid {
+                        center,
+                        axes,
+                        radii,
+                    } => (Shape::Ellipsoid, center, axes, radii),
+                    Volume::Obb {
+                        center,
+                        axes,
+                        half_extents,
+                    } => (Shape::Obb, center, axes, half_extents),
+                    _ => panic!("not an ellipsoid or a box: {v:?}"),
+                };
+                // The file's rows are the core's matrix columns.
+                let rows = [w.axes.x_axis, w.axes.y_axis, w.axes.z_axis].map(|a| a.to_array());
+                assert_eq!(shape, w.shape);
+                assert_eq!(center, w.center.to_array());
+                assert_eq!(axes, rows);
+                assert_eq!(radii, w.radii.to_array());
+            }
             let mesh = shapes::cuboid(DVec3::ZERO, DVec3::new(1.0, 0.5, 0.25), DMat3::IDENTITY);
             let opts = VerifyOptions {
                 points: 2000,
-                fractions: Some(file.fractions.clone()),
                 ..VerifyOptions::default()
             };
-            let _ = verify(&mesh, &file.volumes, &opts);
+            let _ = verify_input::verify(&mesh, &volumes, &opts);
         }
         Err(e) => assert!(!e.to_string().contains('\n')),
     }
@@ -154,7 +190,7 @@ fn check_loaded(loaded: &bvseg_io::LoadedMesh) {
 /// Mesh loading from bytes under `name` (its extension picks the reader): a mesh passing
 /// [`check_loaded`] or a one-line error.
 fn check_mesh_bytes(data: &[u8], name: &str) {
-    match bvseg_io::load_mesh_from_bytes(data, name) {
+    match bvseg_io::load_bytes(data, name, &bvseg_io::LoadOptions::default()) {
         Ok(loaded) => check_loaded(&loaded),
         Err(e) => assert!(!e.to_string().contains('\n'), "multi-line error: {e}"),
     }

@@ -237,7 +237,7 @@ fn process(
         write_output(o, &seg, &ExportOptions::default())?;
     }
     let m = seg.metrics;
-    let met = common::tolerances_met(&seg, params);
+    let met = seg.tolerances_met(params);
     let warnings = loaded.warnings();
     Ok(Row {
         file: file_name(path),

@@ -152,15 +152,6 @@ impl ParamArgs {
     }
 }
 
-/// Whether a tolerance-mode run met its tolerances (`None` with a fixed k).
-pub fn tolerances_met(seg: &Segmentation, params: &Params) -> Option<bool> {
-    let m = seg.metrics;
-    params
-        .k
-        .is_none()
-        .then_some(m.tov < params.tov && m.mov < params.mov)
-}
-
 /// Loads `path` (or the bundled mesh), enforcing `--max-triangles`. Returns the name
 /// messages use and the mesh with its report.
 pub fn load(
@@ -173,18 +164,15 @@ pub fn load(
         mesh: input.mesh_name.clone(),
     };
     let (name, loaded) = match path {
-        Some(path) => (
-            path.display().to_string(),
-            bvseg_io::load_mesh_with(path, &options)?,
-        ),
+        Some(path) => (path.display().to_string(), bvseg_io::load(path, &options)?),
         None => {
             if !quiet {
                 eprintln!("bvseg: no mesh given; using the bundled {BUNDLED_NAME}");
             }
             let loaded = if Path::new(BUNDLED_MESH).is_file() {
-                bvseg_io::load_mesh_with(BUNDLED_MESH, &options)
+                bvseg_io::load(BUNDLED_MESH, &options)
             } else {
-                bvseg_io::load_mesh_from_bytes_with(BUNDLED_BYTES, BUNDLED_NAME, &options)
+                bvseg_io::load_bytes(BUNDLED_BYTES, BUNDLED_NAME, &options)
             };
             (BUNDLED_NAME.to_owned(), loaded?)
         }
@@ -368,8 +356,9 @@ mod tests {
 
     #[test]
     fn embedded_mesh_equals_the_file() {
-        let disk = bvseg_io::load_obj(BUNDLED_MESH).unwrap();
-        let embedded = bvseg_io::load_obj_from_bytes(BUNDLED_BYTES, BUNDLED_NAME).unwrap();
+        let options = LoadOptions::default();
+        let disk = bvseg_io::load(BUNDLED_MESH, &options).unwrap();
+        let embedded = bvseg_io::load_bytes(BUNDLED_BYTES, BUNDLED_NAME, &options).unwrap();
         assert_eq!(disk, embedded);
     }
 

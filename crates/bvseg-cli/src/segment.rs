@@ -7,9 +7,8 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use bvseg_core::{Params, Segmentation};
 use bvseg_io::export::{write_labels, write_output, ExportOptions, OutputFormat};
-use bvseg_io::LoadedMesh;
+use bvseg_io::{CliSummary, LoadedMesh, RunSummary};
 use clap::Args;
-use serde_json::json;
 
 use crate::common::{self, InputArgs, ParamArgs};
 use crate::progress::Progress;
@@ -108,7 +107,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
         bvseg_io::write_atomic(path, svg.as_bytes())?;
     }
 
-    let met = common::tolerances_met(&seg, &params);
+    let met = seg.tolerances_met(&params);
     if args.json {
         print_json(
             &name,
@@ -224,23 +223,19 @@ fn print_json(
     outputs: &[PathBuf],
     warnings: &[String],
 ) -> anyhow::Result<()> {
-    let m = &seg.metrics;
-    let doc = json!({
-        "mesh": name,
-        "triangles": loaded.mesh.triangles().len(),
-        "kind": seg.kind.as_str(),
-        "k": m.k,
-        "f": m.f,
-        "tov": m.tov,
-        "mov": m.mov,
-        "samples": m.samples,
-        "tolerances": params.k.is_none().then(|| json!({"tov": params.tov, "mov": params.mov})),
-        "tolerances_met": common::tolerances_met(seg, params),
-        "seconds": seconds,
-        "outputs": common::shown(outputs),
-        "warnings": warnings,
-    });
-    write_stdout(&format!("{doc}\n"))
+    let summary = RunSummary {
+        cli: Some(CliSummary::new(
+            seg,
+            params,
+            loaded.mesh.triangles().len(),
+            seconds,
+            common::shown(outputs),
+            warnings.to_vec(),
+        )),
+        ..RunSummary::new(name, seg)
+    };
+    // Keys sorted, as this summary has always been printed.
+    write_stdout(&format!("{}\n", summary.to_json_sorted()))
 }
 
 pub fn write_stdout(text: &str) -> anyhow::Result<()> {

@@ -1,13 +1,14 @@
 //! `bvseg verify MESH VOLUMES.json`: an independent check of a volumes file against a mesh
-//! (`bvseg_core::verify`). Exit 0 when every triangle is enclosed, 1 when some point of the
-//! mesh escapes the union of the volumes, 2 on bad input.
-use std::io::Write;
+//! (the `bvseg-verify` crate, which shares no code with the core or the I/O crate). Exit 0
+//! when every triangle is enclosed, 1 when some point of the mesh escapes the union of the
+//! volumes, 2 on bad input.
+use std::io::{Read, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{anyhow, Context};
-use bvseg_core::verify::{verify, VerifyOptions, VerifyReport};
 use bvseg_io::VolumesFile;
+use bvseg_verify::{verify, VerifyOptions, VerifyReport, Volumes};
 use clap::Args;
 use serde_json::json;
 
@@ -37,16 +38,21 @@ pub struct VerifyArgs {
 
 /// Runs `bvseg verify`.
 pub fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
-    let mesh = bvseg_io::load_mesh(&args.mesh)?;
-    let file = bvseg_io::read_volumes(&args.volumes)?;
+    let mesh = bvseg_io::load(&args.mesh, &bvseg_io::LoadOptions::default())?.mesh;
+    // The file is validated by bvseg-io's reader, as everywhere (its checks and messages),
+    // then handed as text to the verifier, which reads it with its own parser.
+    let (file, doc) = read_volumes_text(&args.volumes)?;
+    let name = args.volumes.display();
+    let volumes = Volumes::from_json(&doc).map_err(|e| anyhow!("{name}: {e}"))?;
+    let vertices: Vec<[f64; 3]> = mesh.vertices().iter().map(|v| v.to_array()).collect();
     let opts = VerifyOptions {
         points: args.points,
         seed: args.seed,
-        fractions: Some(file.fractions.clone()),
+        threads: threads(),
         ..VerifyOptions::default()
     };
-    let report =
-        verify(&mesh, &file.volumes, &opts).map_err(|e| anyhow!("{}: {e}", args.mesh.display()))?;
+    let report = verify(&vertices, mesh.triangles(), &volumes, &opts)
+        .map_err(|e| anyhow!("{}: {e}", args.mesh.display()))?;
     let text = if args.json {
         json_report(args, &file, &report).to_string() + "\n"
     } else {
@@ -61,6 +67,39 @@ pub fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// The volumes file, validated by [`bvseg_io::read_volumes`] (whose messages name what is
+/// wrong), and its text. The text is read once more and validated again, so that what is
+/// verified is what was validated even if the file changed in between.
+fn read_volumes_text(path: &std::path::Path) -> anyhow::Result<(VolumesFile, String)> {
+    bvseg_io::read_volumes(path)?;
+    let name = path.display().to_string();
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            f.take(bvseg_io::MAX_VOLUMES_BYTES + 1)
+                .read_to_end(&mut bytes)
+        })
+        .with_context(|| format!("{name}: cannot read"))?;
+    let file = bvseg_io::parse_volumes(&bytes, &name)?;
+    // Valid JSON, hence UTF-8.
+    let text = String::from_utf8(bytes).map_err(|e| anyhow!("{name}: not UTF-8: {e}"))?;
+    Ok((file, text))
+}
+
+/// The verifier's threads: as many as the segmentation's rayon pool would take by default
+/// (`RAYON_NUM_THREADS` when set, else one per core), one without the `parallel` feature.
+/// The report does not depend on it.
+fn threads() -> Option<usize> {
+    if cfg!(feature = "parallel") {
+        std::env::var("RAYON_NUM_THREADS")
+            .ok()
+            .and_then(|s| s.trim().parse::<usize>().ok())
+            .filter(|&n| n > 0)
+    } else {
+        Some(1)
+    }
 }
 
 fn reported(x: Option<f64>) -> String {

@@ -2,20 +2,12 @@
 //! error line naming the file, exit code 2, no panic and no output file. Merely imperfect
 //! meshes must work with a warning.
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-const BIN: &str = env!("CARGO_BIN_EXE_bvseg");
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
+use bvseg_testkit::{scratch, BUNNY};
 
-fn scratch(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("bvseg-bad-input")
-        .join(test);
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+const BIN: &str = env!("CARGO_BIN_EXE_bvseg");
 
 /// Runs `bvseg` in `dir`. On Unix the address space is capped at 2 GiB, so that an
 /// allocation sized by a lying count in a file would fail the run instead of passing.
@@ -36,11 +28,7 @@ fn bvseg(dir: &Path, args: &[&str]) -> Output {
             .unwrap()
     }
     #[cfg(not(unix))]
-    Command::new(BIN)
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
+    bvseg_testkit::run(BIN, dir, args)
 }
 
 fn pseudo_random(n: usize, seed: u32) -> Vec<u8> {

@@ -1,28 +1,16 @@
 //! End-to-end runs of the `bvseg` binary.
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
+
+use bvseg_testkit::{files, scratch, stderr, BUNNY};
 
 const BIN: &str = env!("CARGO_BIN_EXE_bvseg");
 /// Small enough to keep each run well under a second in debug builds.
 const FAST: [&str; 2] = ["--samples", "2000"];
 
-/// A fresh, empty working directory for one test.
-fn scratch(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("bvseg-cli-tests")
-        .join(test);
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 fn bvseg(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
+    bvseg_testkit::run(BIN, dir, args)
 }
 
 fn segment(dir: &Path, args: &[&str]) -> Output {
@@ -30,19 +18,6 @@ fn segment(dir: &Path, args: &[&str]) -> Output {
     v.extend_from_slice(&FAST);
     v.extend_from_slice(args);
     bvseg(dir, &v)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn files(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// Exit code 2, exactly one stderr line `bvseg: error: ...` containing `needle`.
@@ -116,7 +91,7 @@ fn bundled_mesh_k2_writes_the_schema() {
 #[test]
 fn explicit_mesh_and_kinds() {
     let dir = scratch("explicit_mesh_and_kinds");
-    let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
+    let mesh = BUNNY;
     for kind in ["obb", "mixed"] {
         let out = format!("{kind}.json");
         let o = segment(

@@ -1,30 +1,14 @@
 //! `segment` with several outputs, `--json`, `--plot`, `--strict`, limits; `info`; `batch`.
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
+
+use bvseg_testkit::{scratch, stderr, BUNNY};
 
 const BIN: &str = env!("CARGO_BIN_EXE_bvseg");
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
-
-fn scratch(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("bvseg-cli-outputs")
-        .join(test);
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn bvseg(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    bvseg_testkit::run(BIN, dir, args)
 }
 
 #[test]
@@ -216,7 +200,7 @@ fn batch_is_parallel_resumable_and_summarised() {
     fs::create_dir_all(&input).unwrap();
     fs::copy(BUNNY, input.join("bunny.obj")).unwrap();
     // The same solid as ASCII STL, and a broken file.
-    let m = bvseg_io::load_mesh(BUNNY).unwrap();
+    let m = bvseg_io::load(BUNNY, &Default::default()).unwrap().mesh;
     let mut stl = String::from("solid b\n");
     for t in m.triangles() {
         stl += "facet normal 0 0 0\nouter loop\n";

@@ -3,7 +3,9 @@ use std::io;
 
 /// Everything that can go wrong while reading a mesh or writing a result. Every message is a
 /// single line that starts with the file it concerns, so a front end can print it as it is.
+/// More variants may be added: a `match` on it needs a `_` arm.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum IoError {
     /// The operating system refused an operation on a file (open, read, write, rename, ...).
     #[error("{name}: cannot {action}: {source}")]

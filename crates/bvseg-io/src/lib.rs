@@ -1,10 +1,10 @@
 //! # bvseg-io
 //!
-//! File formats for bvseg: meshes in ([`load_mesh`]: Wavefront OBJ, glTF 2.0 / GLB, STL) and
-//! results out (the `bvseg.volumes/1` JSON document, [`write_json`]; engine-ready proxies in
-//! [`export`]). Every error is an [`IoError`] whose message is one line naming the file;
-//! nothing here panics on bad input, and no allocation is sized by an unchecked count read
-//! from a file.
+//! File formats for bvseg: meshes in ([`load`], [`load_bytes`]: Wavefront OBJ, glTF 2.0 /
+//! GLB, STL) and results out (the `bvseg.volumes/1` JSON document, [`write_json`];
+//! engine-ready proxies in [`export`]; the summary of a run, [`RunSummary`]). Every error is
+//! an [`IoError`] whose message is one line naming the file; nothing here panics on bad
+//! input, and no allocation is sized by an unchecked count read from a file.
 #![warn(missing_docs)]
 
 mod atomic;
@@ -16,6 +16,7 @@ mod json;
 mod obj;
 mod report;
 mod stl;
+mod summary;
 mod volumes_read;
 
 use std::path::Path;
@@ -28,20 +29,19 @@ pub use atomic::write_atomic;
 pub use error::IoError;
 pub use finish::{LoadStats, LoadedMesh, MAX_TRIANGLES};
 pub use json::{to_json_string, write_json, GENERATOR, SCHEMA};
-pub use obj::{
-    load_obj, load_obj_detailed, load_obj_from_bytes, load_obj_from_bytes_detailed,
-    load_obj_from_reader, MAX_INPUT_BYTES,
-};
+pub use obj::MAX_INPUT_BYTES;
 pub use report::MeshReport;
+pub use summary::{CliSummary, RunSummary, Tolerances, ViewerSummary};
 
-use bvseg_core::Mesh;
-
-/// The mesh formats [`load_mesh`] reads, as file extensions (compared case-insensitively).
+/// The mesh formats [`load`] and [`load_bytes`] read, as file extensions (compared
+/// case-insensitively).
 pub const MESH_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "stl"];
 
 const SUPPORTED: &str = ".obj, .gltf, .glb, .stl";
 
-/// Which part of a file to load.
+/// What [`load`] and [`load_bytes`] read of a file: `LoadOptions::default()` loads all of
+/// it, and each field set narrows it down. Write it as a struct literal ending in
+/// `..LoadOptions::default()`, so that the code keeps compiling when fields are added.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct LoadOptions {
     /// OBJ: only the object or group with this name (default: all merged).
@@ -51,22 +51,25 @@ pub struct LoadOptions {
     pub mesh: Option<String>,
 }
 
-/// Loads a mesh, choosing the reader by the file's extension; see [`load_mesh_detailed`].
-pub fn load_mesh(path: impl AsRef<Path>) -> Result<Mesh, IoError> {
-    load_mesh_detailed(path).map(|l| l.mesh)
-}
-
-/// Loads a whole mesh file, choosing the reader by the file's extension, and reports what
-/// loading changed (welded vertices, dropped degenerate triangles) and what the mesh is like.
-pub fn load_mesh_detailed(path: impl AsRef<Path>) -> Result<LoadedMesh, IoError> {
-    load_mesh_with(path, &LoadOptions::default())
-}
-
-/// Like [`load_mesh_detailed`], loading only what `options` selects.
-pub fn load_mesh_with(
-    path: impl AsRef<Path>,
-    options: &LoadOptions,
-) -> Result<LoadedMesh, IoError> {
+/// Loads a mesh file, choosing the reader by the file's extension (one of
+/// [`MESH_EXTENSIONS`], compared case-insensitively), and reports what loading changed
+/// (welded vertices, dropped degenerate triangles) and what the mesh is like. Every reader
+/// merges what `options` selects into one mesh, welds exactly coincident positions, drops
+/// degenerate triangles (and lists them), and turns an inward-facing surface outward. A
+/// glTF file may refer to buffer files next to it; no other file is opened (OBJ `.mtl`
+/// files are ignored).
+///
+/// # Errors
+///
+/// An [`IoError`], whose message is one line naming the file: it cannot be opened or read
+/// ([`IoError::Io`]), is a directory ([`IoError::BadPath`]), is larger than
+/// [`MAX_INPUT_BYTES`] ([`IoError::TooLarge`]), has an unsupported extension
+/// ([`IoError::UnsupportedFormat`]), is malformed or lacks the object or mesh `options`
+/// names ([`IoError::Parse`]), holds no usable triangle ([`IoError::NoTriangles`]) or is
+/// refused by [`bvseg_core::Mesh::new`] ([`IoError::Mesh`]); an option that does not apply
+/// to the format ([`LoadOptions::object`] on a non-OBJ file, [`LoadOptions::mesh`] on a
+/// non-glTF one) is an [`IoError::BadPath`].
+pub fn load(path: impl AsRef<Path>, options: &LoadOptions) -> Result<LoadedMesh, IoError> {
     let path = path.as_ref();
     let name = path.display().to_string();
     let ext = extension(path);
@@ -95,19 +98,20 @@ pub fn load_mesh_with(
     }
 }
 
-/// Loads a mesh held in memory; the format is chosen by the extension of `name` (which
-/// error messages also use). glTF documents with external buffer files cannot be read this
-/// way (there is no directory to read them from); GLB and embedded buffers work.
-pub fn load_mesh_from_bytes(bytes: &[u8], name: &str) -> Result<LoadedMesh, IoError> {
-    load_mesh_from_bytes_with(bytes, name, &LoadOptions::default())
-}
-
-/// Like [`load_mesh_from_bytes`], loading only what `options` selects.
-pub fn load_mesh_from_bytes_with(
-    bytes: &[u8],
-    name: &str,
-    options: &LoadOptions,
-) -> Result<LoadedMesh, IoError> {
+/// Loads a mesh held in memory, as [`load`] loads a file: the format is chosen by the
+/// extension of `name`, which error messages also use. glTF documents with external buffer
+/// files cannot be read this way (there is no directory to read them from); GLB and
+/// embedded (data URI) buffers work.
+///
+/// # Errors
+///
+/// As for [`load`], less the operating system's: more than [`MAX_INPUT_BYTES`]
+/// ([`IoError::TooLarge`]), an unsupported extension of `name`
+/// ([`IoError::UnsupportedFormat`]), malformed content, a glTF buffer in an external file or
+/// a missing object or mesh ([`IoError::Parse`]), no usable triangle
+/// ([`IoError::NoTriangles`]), a mesh [`bvseg_core::Mesh::new`] refuses ([`IoError::Mesh`])
+/// or an option that does not apply to the format ([`IoError::BadPath`]).
+pub fn load_bytes(bytes: &[u8], name: &str, options: &LoadOptions) -> Result<LoadedMesh, IoError> {
     if bytes.len() as u64 > MAX_INPUT_BYTES {
         return Err(IoError::TooLarge {
             name: name.to_owned(),

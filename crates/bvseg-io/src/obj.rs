@@ -5,10 +5,9 @@
 //! file that repeats positions (per object, or per face as some exporters do) still yields a
 //! closed surface.
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, Read};
+use std::io::{self, BufRead, Read};
 use std::path::Path;
 
-use bvseg_core::Mesh;
 use glam::DVec3;
 
 use crate::finish::{finish, RawMesh};
@@ -18,35 +17,6 @@ use crate::{IoError, LoadedMesh};
 /// face in memory at several times its text size, so this keeps a stray multi-gigabyte file
 /// from exhausting memory.
 pub const MAX_INPUT_BYTES: u64 = 2 << 30;
-
-/// Load an OBJ file; see [`load_obj_detailed`].
-pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, IoError> {
-    load_obj_detailed(path).map(|l| l.mesh)
-}
-
-/// Load an OBJ file: all objects and groups merged, faces fanned into triangles, exactly
-/// coincident vertices welded, degenerate triangles dropped (and counted).
-pub fn load_obj_detailed(path: impl AsRef<Path>) -> Result<LoadedMesh, IoError> {
-    let path = path.as_ref();
-    let name = path.display().to_string();
-    let file = open_input(path, &name)?;
-    read_obj(BufReader::new(file), &name, None)
-}
-
-/// Load an OBJ file from a reader; `name` is what error messages call it.
-pub fn load_obj_from_reader(reader: impl Read, name: &str) -> Result<Mesh, IoError> {
-    read_obj(BufReader::new(reader), name, None).map(|l| l.mesh)
-}
-
-/// Load an OBJ file held in memory; `name` is what error messages call it.
-pub fn load_obj_from_bytes(bytes: &[u8], name: &str) -> Result<Mesh, IoError> {
-    load_obj_from_bytes_detailed(bytes, name).map(|l| l.mesh)
-}
-
-/// Like [`load_obj_from_bytes`], also returning what loading changed.
-pub fn load_obj_from_bytes_detailed(bytes: &[u8], name: &str) -> Result<LoadedMesh, IoError> {
-    read_obj(bytes, name, None)
-}
 
 /// Opens `path` for reading, refusing directories and files over [`MAX_INPUT_BYTES`] up front
 /// (the reader enforces the size limit again for files that grow or lie about their size).
@@ -290,10 +260,11 @@ impl<R: BufRead> Read for PositionLines<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bvseg_core::Mesh;
     use std::collections::{HashMap, HashSet};
 
     fn load(text: &str) -> Result<LoadedMesh, IoError> {
-        load_obj_from_bytes_detailed(text.as_bytes(), "t.obj")
+        read_obj(text.as_bytes(), "t.obj", None)
     }
 
     fn err(text: &str) -> String {
@@ -463,7 +434,7 @@ mod tests {
     #[test]
     fn bundled_bunny_is_closed() {
         let bytes = include_bytes!("../../../assets/meshes/bunny.obj");
-        let l = load_obj_from_bytes_detailed(bytes, "bunny.obj").unwrap();
+        let l = read_obj(&bytes[..], "bunny.obj", None).unwrap();
         assert_eq!(l.mesh.triangles().len(), 3674);
         assert!(is_closed(&l.mesh));
         let used: HashSet<u32> = l.mesh.triangles().iter().flatten().copied().collect();
@@ -517,9 +488,7 @@ mod tests {
         let bytes: Vec<u8> = (0..4096u32)
             .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
             .collect();
-        let e = load_obj_from_bytes(&bytes, "t.obj")
-            .unwrap_err()
-            .to_string();
+        let e = read_obj(&bytes[..], "t.obj", None).unwrap_err().to_string();
         assert!(e.starts_with("t.obj: "), "{e}");
         assert!(!e.contains('\n'));
     }

@@ -1,7 +1,6 @@
 //! The engine-ready outputs read back: GLB through the `gltf` crate, MJCF as XML, OBJ through
 //! our own reader.
 use std::fs;
-use std::path::Path;
 
 use bvseg_core::{BoundingKind, BoundingVolume, Metrics, Part, Segmentation, Shape};
 use bvseg_io::export::{to_glb, to_labels, to_mjcf, to_obj, write_output, ExportOptions};
@@ -159,7 +158,7 @@ fn glb_has_one_node_per_volume_and_colliders() {
         .extensions_used
         .contains(&"KHR_physics_rigid_bodies".to_string()));
     // Our own reader takes it too (the proxies and the input mesh).
-    assert!(bvseg_io::load_mesh_from_bytes(&bytes, "x.glb").is_ok());
+    assert!(bvseg_io::load_bytes(&bytes, "x.glb", &bvseg_io::LoadOptions::default()).is_ok());
 }
 
 #[test]
@@ -210,7 +209,7 @@ fn obj_proxies_are_one_object_per_part() {
             object: Some(format!("part_{i}")),
             ..Default::default()
         };
-        let l = bvseg_io::load_mesh_from_bytes_with(text.as_bytes(), "p.obj", &opts).unwrap();
+        let l = bvseg_io::load_bytes(text.as_bytes(), "p.obj", &opts).unwrap();
         assert_eq!(l.report.open_edges, 0);
         let (vol, exact) = (l.report.volume, p.volume.volume());
         match p.volume.shape {
@@ -223,9 +222,7 @@ fn obj_proxies_are_one_object_per_part() {
 
 #[test]
 fn write_output_picks_the_format_and_refuses_others() {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bvseg-io-export");
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
+    let dir = bvseg_testkit::scratch("write_output_picks_the_format_and_refuses_others");
     let seg = seg();
     for f in ["a.json", "a.glb", "a.xml", "a.obj"] {
         write_output(dir.join(f), &seg, &ExportOptions::default()).unwrap();

@@ -1,19 +1,10 @@
 //! The mesh readers: the same solid written as OBJ, STL (binary and ASCII) and glTF (every
 //! buffer kind, indexed or not, under a node transform) loads as the same mesh.
 use std::fs;
-use std::path::{Path, PathBuf};
 
-use bvseg_io::{load_mesh_detailed, load_mesh_from_bytes, load_mesh_with, LoadOptions};
+use bvseg_io::{load, load_bytes, LoadOptions};
+use bvseg_testkit::scratch;
 use glam::{DMat4, DQuat, DVec3};
-
-fn scratch(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("bvseg-io-formats")
-        .join(test);
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A box [0,2]x[0,1]x[0,1] as 8 vertices and 12 outward triangles.
 fn cube() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
@@ -205,9 +196,9 @@ fn stl_binary_and_ascii_equal_the_obj() {
     fs::write(dir.join("c.obj"), obj).unwrap();
     fs::write(dir.join("c.stl"), stl_binary(&v, &t)).unwrap();
     fs::write(dir.join("a.STL"), stl_ascii(&v, &t)).unwrap();
-    let o = load_mesh_detailed(dir.join("c.obj")).unwrap();
-    let b = load_mesh_detailed(dir.join("c.stl")).unwrap();
-    let a = load_mesh_detailed(dir.join("a.STL")).unwrap();
+    let o = load(dir.join("c.obj"), &LoadOptions::default()).unwrap();
+    let b = load(dir.join("c.stl"), &LoadOptions::default()).unwrap();
+    let a = load(dir.join("a.STL"), &LoadOptions::default()).unwrap();
     assert_eq!(b.stats.vertices_read, 36);
     assert_eq!(b.mesh.vertices().len(), 8, "welded");
     assert_eq!(o.mesh, b.mesh);
@@ -257,21 +248,21 @@ fn gltf_buffers_of_every_kind_apply_the_node_transform() {
         let x = gltf_doc(Some("c%20b.bin"), bin.len(), m, indexed);
         fs::write(dir.join("x.gltf"), &x).unwrap();
         for f in ["c.glb", "e.gltf", "x.gltf"] {
-            let l = load_mesh_with(dir.join(f), &box_only).unwrap();
+            let l = load(dir.join(f), &box_only).unwrap();
             assert_eq!(
                 corner_sets(&l.mesh, &DMat4::IDENTITY),
                 expect,
                 "{f} indexed={indexed}"
             );
             // Without --mesh both meshes are there: the second is shifted, not transformed.
-            let all = load_mesh_detailed(dir.join(f)).unwrap();
+            let all = load(dir.join(f), &LoadOptions::default()).unwrap();
             assert_eq!(all.report.components, 2);
             assert_eq!(all.mesh.triangles().len(), 24);
         }
         // From bytes: GLB and data URIs work, external files do not.
-        assert!(load_mesh_from_bytes(&g, "c.glb").is_ok());
-        assert!(load_mesh_from_bytes(e.as_bytes(), "e.gltf").is_ok());
-        let err = load_mesh_from_bytes(x.as_bytes(), "x.gltf")
+        assert!(load_bytes(&g, "c.glb", &LoadOptions::default()).is_ok());
+        assert!(load_bytes(e.as_bytes(), "e.gltf", &LoadOptions::default()).is_ok());
+        let err = load_bytes(x.as_bytes(), "x.gltf", &LoadOptions::default())
             .unwrap_err()
             .to_string();
         assert!(
@@ -279,7 +270,7 @@ fn gltf_buffers_of_every_kind_apply_the_node_transform() {
             "{err}"
         );
     }
-    let err = load_mesh_with(
+    let err = load(
         dir.join("c.glb"),
         &LoadOptions {
             mesh: Some("nope".into()),
@@ -299,7 +290,7 @@ fn mirroring_transform_keeps_the_solid_outward() {
     let bin = gltf_bin(true);
     let m = DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)).to_cols_array();
     let g = glb(&gltf_doc(None, bin.len(), Some(m), true), &bin);
-    let l = load_mesh_from_bytes(&g, "m.glb").unwrap();
+    let l = load_bytes(&g, "m.glb", &LoadOptions::default()).unwrap();
     assert!(
         !l.report.flipped,
         "the reader itself accounts for the mirror"
@@ -322,16 +313,16 @@ fn obj_object_selection_and_inward_orientation() {
         object: Some(o.into()),
         ..Default::default()
     };
-    let l = bvseg_io::load_mesh_from_bytes_with(s.as_bytes(), "t.obj", &opts("first")).unwrap();
+    let l = load_bytes(s.as_bytes(), "t.obj", &opts("first")).unwrap();
     assert_eq!(l.mesh.triangles().len(), 12);
     assert!(l.report.flipped && l.report.volume > 0.0);
     assert!(l.report.warnings().iter().any(|w| w.contains("inward")));
-    let e = bvseg_io::load_mesh_from_bytes_with(s.as_bytes(), "t.obj", &opts("third")).unwrap_err();
+    let e = load_bytes(s.as_bytes(), "t.obj", &opts("third")).unwrap_err();
     assert_eq!(
         e.to_string(),
         "t.obj: no object or group named 'third' (the file has: 'first', 'second')"
     );
-    let e = bvseg_io::load_mesh_from_bytes_with(s.as_bytes(), "t.stl", &opts("first")).unwrap_err();
+    let e = load_bytes(s.as_bytes(), "t.stl", &opts("first")).unwrap_err();
     assert_eq!(e.to_string(), "t.stl: --object applies only to OBJ files");
 }
 
@@ -345,7 +336,9 @@ fn report_counts_defects() {
         .for_each(|p| s += &format!("v {} {} {}\n", p[0], p[1], p[2]));
     t.iter()
         .for_each(|f| s += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1));
-    let r = load_mesh_from_bytes(s.as_bytes(), "t.obj").unwrap().report;
+    let r = load_bytes(s.as_bytes(), "t.obj", &LoadOptions::default())
+        .unwrap()
+        .report;
     assert_eq!(r.open_edges, 3);
     assert_eq!(r.duplicate_faces, 1);
     assert_eq!(r.non_manifold_edges, 3);

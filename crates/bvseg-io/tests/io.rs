@@ -1,40 +1,29 @@
 //! File-level behaviour of bvseg-io: loading from paths, atomic writes, JSON files.
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use bvseg_core::{segment, Params};
 use bvseg_io::{
-    load_mesh, load_mesh_detailed, load_obj, write_atomic, write_json, IoError, MAX_INPUT_BYTES,
+    load, load_bytes, write_atomic, write_json, CliSummary, IoError, LoadOptions, RunSummary,
+    ViewerSummary, MAX_INPUT_BYTES,
 };
+use bvseg_testkit::{files as entries, scratch, BUNNY};
 
-/// A fresh, empty directory for one test.
-fn scratch(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("bvseg-io-tests")
-        .join(test);
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
+fn load_all(path: impl AsRef<Path>) -> Result<bvseg_io::LoadedMesh, IoError> {
+    load(path, &LoadOptions::default())
 }
-
-fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
-
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
 
 #[test]
 fn loads_the_bundled_bunny_from_disk() {
-    let l = load_mesh_detailed(BUNNY).unwrap();
+    let l = load_all(BUNNY).unwrap();
     assert_eq!(l.mesh.triangles().len(), 3674);
     assert_eq!(l.stats.degenerate, 0);
     assert!(l.mesh.signed_volume().abs() > 0.0);
-    assert_eq!(load_obj(BUNNY).unwrap(), l.mesh);
+    let bytes = fs::read(BUNNY).unwrap();
+    assert_eq!(
+        load_bytes(&bytes, "bunny.obj", &LoadOptions::default()).unwrap(),
+        l
+    );
 }
 
 #[test]
@@ -42,14 +31,14 @@ fn extension_is_case_insensitive() {
     let dir = scratch("extension_is_case_insensitive");
     let p = dir.join("tri.OBJ");
     fs::write(&p, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-    assert_eq!(load_mesh(&p).unwrap().triangles().len(), 1);
+    assert_eq!(load_all(&p).unwrap().mesh.triangles().len(), 1);
 }
 
 #[test]
 fn load_errors_name_the_file_in_one_line() {
     let dir = scratch("load_errors_name_the_file_in_one_line");
     let missing = dir.join("missing.obj");
-    let e = load_mesh(&missing).unwrap_err();
+    let e = load_all(&missing).unwrap_err();
     assert!(matches!(e, IoError::Io { .. }));
     let msg = e.to_string();
     assert!(
@@ -59,7 +48,7 @@ fn load_errors_name_the_file_in_one_line() {
 
     let stl = dir.join("part.ply");
     fs::write(&stl, "ply\n").unwrap();
-    let msg = load_mesh(&stl).unwrap_err().to_string();
+    let msg = load_all(&stl).unwrap_err().to_string();
     assert_eq!(
         msg,
         format!(
@@ -70,7 +59,7 @@ fn load_errors_name_the_file_in_one_line() {
 
     let bare = dir.join("README");
     fs::write(&bare, "hello").unwrap();
-    let msg = load_mesh(&bare).unwrap_err().to_string();
+    let msg = load_all(&bare).unwrap_err().to_string();
     assert!(
         msg.ends_with(
             "unsupported mesh format (no file extension) (supported: .obj, .gltf, .glb, .stl)"
@@ -80,14 +69,14 @@ fn load_errors_name_the_file_in_one_line() {
 
     let sub = dir.join("folder.obj");
     fs::create_dir(&sub).unwrap();
-    let msg = load_mesh(&sub).unwrap_err().to_string();
+    let msg = load_all(&sub).unwrap_err().to_string();
     assert_eq!(
         msg,
         format!("{}: is a directory, not a mesh file", sub.display())
     );
 
     for e in [missing, stl, bare, sub] {
-        assert!(!load_mesh(&e).unwrap_err().to_string().contains('\n'));
+        assert!(!load_all(&e).unwrap_err().to_string().contains('\n'));
     }
 }
 
@@ -99,7 +88,7 @@ fn oversized_file_is_refused_before_reading() {
     let f = fs::File::create(&p).unwrap();
     f.set_len(MAX_INPUT_BYTES + 1).unwrap();
     drop(f);
-    let e = load_mesh(&p).unwrap_err();
+    let e = load_all(&p).unwrap_err();
     fs::remove_file(&p).unwrap();
     assert!(matches!(e, IoError::TooLarge { .. }), "{e}");
     assert!(e.to_string().contains("larger than"));
@@ -138,7 +127,7 @@ fn write_atomic_failure_leaves_nothing_behind() {
 #[test]
 fn json_file_round_trip() {
     let dir = scratch("json_file_round_trip");
-    let mesh = load_mesh(BUNNY).unwrap();
+    let mesh = load_all(BUNNY).unwrap().mesh;
     let params = Params {
         samples: 2000,
         k: Some(2),
@@ -158,4 +147,117 @@ fn json_file_round_trip() {
     let sum: f64 = vols.iter().map(|v| v["fraction"].as_f64().unwrap()).sum();
     assert!((sum - 1.0).abs() < 1e-9);
     assert_eq!(entries(&dir), ["v.json"]);
+}
+
+#[test]
+fn run_summary_keeps_each_front_end_s_keys_and_order() {
+    let mesh = load_all(BUNNY).unwrap().mesh;
+    let fixed = Params {
+        samples: 2000,
+        k: Some(2),
+        ..Params::default()
+    };
+    let seg = segment(&mesh, &fixed).unwrap();
+    let m = seg.metrics;
+    let keys = |text: &str| -> Vec<String> {
+        let v: serde_json::Value = serde_json::from_str(text).unwrap();
+        // serde_json's map is sorted here, so the order is read from the text itself.
+        let mut found: Vec<(usize, String)> = v
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(|k| (text.find(&format!("\"{k}\":")).unwrap(), k.clone()))
+            .collect();
+        found.sort();
+        found.into_iter().map(|(_, k)| k).collect()
+    };
+
+    // The command line: keys sorted, the tolerances null with a fixed k.
+    let cli = RunSummary {
+        cli: Some(CliSummary::new(
+            &seg,
+            &fixed,
+            3674,
+            1.5,
+            vec!["v.json".into()],
+            vec![],
+        )),
+        ..RunSummary::new("a \"b\"\n.obj", &seg)
+    };
+    let text = cli.to_json_sorted();
+    assert_eq!(
+        keys(&text),
+        [
+            "f",
+            "k",
+            "kind",
+            "mesh",
+            "mov",
+            "outputs",
+            "samples",
+            "seconds",
+            "tolerances",
+            "tolerances_met",
+            "tov",
+            "triangles",
+            "warnings"
+        ]
+    );
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["mesh"], "a \"b\"\n.obj");
+    assert_eq!(v["k"], 2);
+    assert_eq!(v["tov"].as_f64(), Some(m.tov));
+    assert!(v["tolerances"].is_null() && v["tolerances_met"].is_null());
+    assert!(!text.contains('\n'));
+
+    // In tolerance mode they are there, and met follows the core's rule.
+    let tol = Params {
+        samples: 2000,
+        k: None,
+        max_k: 3,
+        ..Params::default()
+    };
+    let seg_t = segment(&mesh, &tol).unwrap();
+    let cli = RunSummary {
+        cli: Some(CliSummary::new(&seg_t, &tol, 3674, 1.5, vec![], vec![])),
+        ..RunSummary::new("bunny.obj", &seg_t)
+    };
+    let text = cli.to_json_sorted();
+    assert!(
+        text.contains(&format!(
+            "\"tolerances\":{{\"mov\":{},\"tov\":{}}}",
+            tol.mov, tol.tov
+        )),
+        "{text}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["tolerances_met"].as_bool(), seg_t.tolerances_met(&tol));
+
+    // The viewer: the page contract first, in its order.
+    let page = RunSummary {
+        viewer: Some(ViewerSummary {
+            met: seg.tolerances_met(&fixed),
+            time_s: 2.0,
+            core_s: f64::NAN,
+            frames: 7,
+            view: Some([1.0, 2.0, 3.5, 4.0]),
+        }),
+        ..RunSummary::new("bunny.obj", &seg)
+    };
+    let text = page.to_json();
+    assert!(
+        text.starts_with(&format!("{{\"k\":2,\"tov\":{},", m.tov)),
+        "{text}"
+    );
+    assert_eq!(
+        keys(&text),
+        [
+            "k", "tov", "mov", "f", "mesh", "samples", "kind", "met", "time_s", "core_s", "frames",
+            "view"
+        ]
+    );
+    assert!(
+        text.contains("\"met\":null") && text.contains("\"core_s\":null"),
+        "{text}"
+    );
 }

@@ -59,13 +59,15 @@ pub struct LoadedFile {
     pub warnings: Vec<String>,
 }
 
-/// Turns the bytes of a mesh file into a mesh through `bvseg_io`'s loaders (OBJ, glTF, GLB,
-/// STL), choosing the reader by `name`'s extension. Every way into the viewer (bundled
-/// meshes, open file, drag and drop, the command line) goes through here. The error is one
-/// line naming the file; a `.gltf` whose buffers are separate files cannot be read from
-/// bytes alone, and its error says to use `.glb` or embedded buffers.
+/// Turns the bytes of a mesh file into a mesh through [`bvseg_io::load_bytes`] (OBJ, glTF,
+/// GLB, STL), choosing the reader by `name`'s extension, with the load warnings and whether
+/// the mesh encloses no volume as one list of lines for the UI. Every way into the viewer
+/// (bundled meshes, open file, drag and drop, the command line) goes through here. The error
+/// is one line naming the file; a `.gltf` whose buffers are separate files cannot be read
+/// from bytes alone, and its error says to use `.glb` or embedded buffers.
 pub fn load_mesh_bytes(bytes: &[u8], name: &str) -> Result<LoadedFile, String> {
-    let loaded = bvseg_io::load_mesh_from_bytes(bytes, name).map_err(|e| e.to_string())?;
+    let loaded = bvseg_io::load_bytes(bytes, name, &bvseg_io::LoadOptions::default())
+        .map_err(|e| e.to_string())?;
     let mut warnings = loaded.warnings();
     if loaded.encloses_no_volume() {
         warnings.push("the mesh encloses no volume (flat or open): it cannot be segmented".into());

@@ -15,8 +15,7 @@ fn viewer(args: &[&str]) -> (i32, String, String) {
 
 #[test]
 fn bad_mesh_is_a_one_line_error_naming_the_file() {
-    let dir = std::env::temp_dir().join(format!("bvseg-viewer-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = bvseg_testkit::scratch("bad_mesh_is_a_one_line_error_naming_the_file");
     let bad = dir.join("broken.obj");
     std::fs::write(&bad, "v 0 0 0\nf 1 2 3\n").unwrap();
     let bad = bad.to_str().unwrap();

@@ -113,8 +113,7 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     // Result -> Save GLB… asks for a path and writes the file there.
     let json = h.state().export_bytes(Export::Json).unwrap();
     assert_eq!(json, bvseg_io::to_json_string(result_of(&h)).into_bytes());
-    let dir = std::env::temp_dir().join(format!("bvseg-viewer-panels-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = bvseg_testkit::scratch("controls_change_the_run_and_the_parts_table_highlights");
     let out = dir.join("dog.glb");
     h.get_by_label("Result").click();
     h.run_steps(2);
@@ -139,7 +138,7 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
         mesh: Some("input_mesh".into()),
         ..Default::default()
     };
-    let back = bvseg_io::load_mesh_from_bytes_with(&glb, "dog.glb", &options).unwrap();
+    let back = bvseg_io::load_bytes(&glb, "dog.glb", &options).unwrap();
     assert_eq!(
         back.mesh.triangles().len(),
         h.state().result().unwrap().triangle_parts.len()
@@ -274,8 +273,7 @@ fn open_through_dialog(h: &mut Harness<'_, ViewerApp>, path: &std::path::Path) {
 #[test]
 fn glb_and_stl_files_open_through_the_dialog_and_run() {
     let bunny = bvseg_viewer::meshes::load_bundled(&bvseg_viewer::BUNDLED[0]).unwrap();
-    let dir = std::env::temp_dir().join(format!("bvseg-viewer-formats-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = bvseg_testkit::scratch("glb_and_stl_files_open_through_the_dialog_and_run");
     let (mut h, _) = harness("spot");
     h.run_steps(2);
     h.get_by_label("Fixed k").click();

@@ -495,59 +495,25 @@ impl eframe::App for ViewerApp {
     }
 }
 
-/// The summary of a finished run (`None` before the end) as one JSON object: `k`, `tov`,
-/// `mov`, `f` (the page contract), then `mesh` (its name), `samples`, `kind`, `met` (the
-/// tolerances were met; `null` with a fixed k), `time_s` and `core_s` (the run's wall time, and
-/// the part of it spent in the core rather than drawing), `frames` (frames of the run) and
-/// `view` (the 3D view's rectangle in CSS pixels, so that a browser test knows where to look).
+/// The summary of a finished run (`None` before the end) as one JSON object
+/// ([`bvseg_io::RunSummary`] with the viewer's fields): `k`, `tov`, `mov`, `f` (the page
+/// contract), then `mesh` (its name), `samples`, `kind`, `met` (the tolerances were met;
+/// `null` with a fixed k), `time_s` and `core_s` (the run's wall time, and the part of it
+/// spent in the core rather than drawing), `frames` (frames of the run) and `view` (the 3D
+/// view's rectangle in CSS pixels, so that a browser test knows where to look).
 pub fn summary_json(mesh: &str, s: &Session, view: Option<[f32; 4]>) -> Option<String> {
     let res = s.result()?;
-    let params = s.params();
-    let num = |x: f64| {
-        if x.is_finite() {
-            format!("{x}")
-        } else {
-            "null".into()
-        }
+    let summary = bvseg_io::RunSummary {
+        viewer: Some(bvseg_io::ViewerSummary {
+            met: res.tolerances_met(s.params()),
+            time_s: s.wall().as_secs_f64(),
+            core_s: s.busy().as_secs_f64(),
+            frames: s.calls(),
+            view,
+        }),
+        ..bvseg_io::RunSummary::new(mesh, res)
     };
-    let m = res.metrics;
-    let met = match params.k {
-        Some(_) => "null".to_string(),
-        None => (m.tov < params.tov && m.mov < params.mov).to_string(),
-    };
-    let view = view.map_or("null".into(), |v| {
-        format!("[{},{},{},{}]", v[0], v[1], v[2], v[3])
-    });
-    Some(format!(
-        "{{\"k\":{},\"tov\":{},\"mov\":{},\"f\":{},\"mesh\":{},\"samples\":{},\"kind\":\"{}\",\"met\":{},\"time_s\":{},\"core_s\":{},\"frames\":{},\"view\":{}}}",
-        m.k,
-        num(m.tov),
-        num(m.mov),
-        num(m.f),
-        json_string(mesh),
-        m.samples,
-        res.kind.as_str(),
-        met,
-        num(s.wall().as_secs_f64()),
-        num(s.busy().as_secs_f64()),
-        s.calls(),
-        view
-    ))
-}
-
-/// `text` as a JSON string literal.
-fn json_string(text: &str) -> String {
-    let mut out = String::from("\"");
-    for c in text.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
+    Some(summary.to_json())
 }
 
 #[cfg(test)]

@@ -1,0 +1,141 @@
+//! The summary of one segmentation run as one JSON object: what `bvseg segment --json` prints
+//! and what the viewer reports to its page (and prints with `bvseg-viewer --run`).
+//!
+//! Both front ends fill the same [`RunSummary`]; its serializer names and formats every key
+//! (numbers as `serde_json` prints them, non-finite ones as `null`), and whether the
+//! tolerances were met is always [`Segmentation::tolerances_met`].
+use bvseg_core::{Params, Segmentation};
+use serde::Serialize;
+
+/// The summary of a finished run. The figures every front end has come first, led by the
+/// viewer's page contract `k`, `tov`, `mov`, `f`; then `mesh`, `samples` and `kind`; then
+/// the fields only the command line ([`CliSummary`]) or only the viewer ([`ViewerSummary`])
+/// has, each set present only when given.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunSummary {
+    /// Number of parts.
+    pub k: usize,
+    /// Total outside volume TOV.
+    pub tov: f64,
+    /// Largest per-part outside volume MOV.
+    pub mov: f64,
+    /// The objective F.
+    pub f: f64,
+    /// The mesh, as the front end names it.
+    pub mesh: String,
+    /// Interior samples used.
+    pub samples: usize,
+    /// Bounding-volume kind (`ellipsoid`, `obb` or `mixed`).
+    pub kind: &'static str,
+    /// What the command line adds, after the shared figures.
+    #[serde(flatten)]
+    pub cli: Option<CliSummary>,
+    /// What the viewer adds, after the shared figures.
+    #[serde(flatten)]
+    pub viewer: Option<ViewerSummary>,
+}
+
+/// The fields of [`RunSummary`] that `bvseg segment --json` adds.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CliSummary {
+    /// Triangles of the mesh (after welding and dropping degenerate ones).
+    pub triangles: usize,
+    /// The tolerances of a tolerance-mode run; `null` with a fixed k.
+    pub tolerances: Option<Tolerances>,
+    /// Whether the tolerances were met; `null` with a fixed k.
+    pub tolerances_met: Option<bool>,
+    /// Wall time of the segmentation, in seconds.
+    pub seconds: f64,
+    /// The files written, as given.
+    pub outputs: Vec<String>,
+    /// Warnings about the mesh and the run, one line each.
+    pub warnings: Vec<String>,
+}
+
+/// The fields of [`RunSummary`] that the viewer adds (its page contract, read by the
+/// browser test).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ViewerSummary {
+    /// Whether the tolerances were met; `null` with a fixed k.
+    pub met: Option<bool>,
+    /// Wall time of the run, in seconds.
+    pub time_s: f64,
+    /// The part of `time_s` spent in the core rather than drawing.
+    pub core_s: f64,
+    /// Frames the run took.
+    pub frames: usize,
+    /// The 3D view's rectangle `[x, y, width, height]` in CSS pixels, when known.
+    pub view: Option<[f32; 4]>,
+}
+
+/// The tolerances of a tolerance-mode run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Tolerances {
+    /// Tolerance on TOV.
+    pub tov: f64,
+    /// Tolerance on MOV.
+    pub mov: f64,
+}
+
+impl Tolerances {
+    /// The tolerances `params` sets, `None` with a fixed k (which has none).
+    pub fn of(params: &Params) -> Option<Self> {
+        params.k.is_none().then_some(Self {
+            tov: params.tov,
+            mov: params.mov,
+        })
+    }
+}
+
+impl RunSummary {
+    /// The shared figures of `seg`, a run of the mesh called `mesh`, with neither front end's
+    /// fields.
+    pub fn new(mesh: &str, seg: &Segmentation) -> Self {
+        let m = &seg.metrics;
+        Self {
+            k: m.k,
+            tov: m.tov,
+            mov: m.mov,
+            f: m.f,
+            mesh: mesh.to_owned(),
+            samples: m.samples,
+            kind: seg.kind.as_str(),
+            cli: None,
+            viewer: None,
+        }
+    }
+
+    /// One line of JSON with the keys in the order of the fields: the page contract (`k`,
+    /// `tov`, `mov`, `f`) first. What the viewer reports.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("a RunSummary always serializes")
+    }
+
+    /// One line of JSON with the keys sorted, as `bvseg segment --json` prints it.
+    pub fn to_json_sorted(&self) -> String {
+        let mut v = serde_json::to_value(self).expect("a RunSummary always serializes");
+        v.sort_all_objects();
+        v.to_string()
+    }
+}
+
+impl CliSummary {
+    /// The command line's fields for `seg`, a run with `params`.
+    pub fn new(
+        seg: &Segmentation,
+        params: &Params,
+        triangles: usize,
+        seconds: f64,
+        outputs: Vec<String>,
+        warnings: Vec<String>,
+    ) -> Self {
+        Self {
+            triangles,
+            tolerances: Tolerances::of(params),
+            tolerances_met: seg.tolerances_met(params),
+            seconds,
+            outputs,
+            warnings,
+        }
+    }
+}

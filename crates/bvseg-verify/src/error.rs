@@ -1,0 +1,45 @@
+use thiserror::Error;
+
+/// Everything that can go wrong in [`crate::verify`] and [`crate::Volumes::from_json`]: each
+/// variant is a problem with the input. Messages are one line.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum VerifyError {
+    /// The mesh has no triangles.
+    #[error("the mesh has no triangles")]
+    NoTriangles,
+    /// A vertex coordinate is NaN or infinite, or above 1e100 in magnitude.
+    #[error("vertex {index} has a non-finite or out-of-range coordinate")]
+    BadVertex {
+        /// Index of the offending vertex.
+        index: usize,
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {index} refers to vertex {vertex}, but the mesh has only {count} vertices")]
+    BadIndex {
+        /// Index of the offending triangle.
+        index: usize,
+        /// The vertex index it refers to.
+        vertex: u32,
+        /// Number of vertices in the mesh.
+        count: usize,
+    },
+    /// The mesh encloses no volume at the resolution of the verification grid.
+    #[error("the mesh encloses no volume (flat, open or degenerate): {0}")]
+    NoVolume(String),
+    /// An option or a volume is out of its valid range.
+    #[error("invalid parameter: {0}")]
+    InvalidParams(String),
+    /// The volumes document breaks the `bvseg.volumes` schema.
+    #[error("invalid volumes document: {0}")]
+    Document(String),
+    /// The volumes document is valid `bvseg.volumes/2` but lists a shape that this verifier
+    /// cannot check yet (sphere, capsule, cylinder or convex hull).
+    #[error("volume {index}: shape \"{shape}\" is not supported by the verifier yet (it checks ellipsoids and obbs)")]
+    UnsupportedShape {
+        /// Index of the volume in the document.
+        index: usize,
+        /// The shape's name in the document.
+        shape: String,
+    },
+}
