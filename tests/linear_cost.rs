@@ -17,7 +17,7 @@ const UNITS_PER_BYTE: f64 = 8.0;
 
 /// Loads and segments one file; the work it took and whether it was refused.
 fn work(bytes: &[u8], name: &str) -> (u64, Result<(), String>) {
-    let before = bvseg::work::total();
+    let before = bvseg::internals::work::total();
     let outcome = bvseg::io::load_mesh_from_bytes(bytes, name)
         .map_err(|e| e.to_string())
         .and_then(|loaded| {
@@ -29,7 +29,7 @@ fn work(bytes: &[u8], name: &str) -> (u64, Result<(), String>) {
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         });
-    (bvseg::work::total() - before, outcome)
+    (bvseg::internals::work::total() - before, outcome)
 }
 
 #[test]

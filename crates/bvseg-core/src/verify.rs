@@ -194,7 +194,7 @@ pub fn verify(
 }
 
 fn check_inputs(volumes: &[BoundingVolume], opts: &VerifyOptions) -> Result<(), Error> {
-    let bad = |s: String| Err(Error::InvalidParams(s));
+    let bad = |s: String| Err(Error::Internal(s));
     if !(1000..=MAX_VERIFY_POINTS).contains(&opts.points) {
         return bad(format!(
             "points must be between 1000 and {MAX_VERIFY_POINTS}, got {}",
