@@ -1,7 +1,7 @@
 //! Bounding-volume stage: convex hull, minimum-volume enclosing ellipsoid and tight oriented
 //! box of 10,000-point parts (the MVEE and OBB times include their hull).
-use bvseg::bounding::{hull::convex_hull, mvee::mvee, obb::min_obb};
-use bvseg::rng::Rng;
+use bvseg::internals::Rng;
+use bvseg::internals::{convex_hull, min_obb, mvee};
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use glam::{DMat3, DVec3, EulerRot};
 

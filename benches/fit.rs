@@ -10,12 +10,12 @@
 //! count): `hull_points`, then `Fitter::fit_points` on the hull.
 use std::path::{Path, PathBuf};
 
-use bvseg::bounding::hull::hull_points;
-use bvseg::bounding::mvee::mvee_of_hull;
-use bvseg::enclosure::Enclosure;
-use bvseg::fitting::{Fitter, MVEE_TOL};
-use bvseg::partition::Solid;
-use bvseg::sampling::Grid;
+use bvseg::internals::hull_points;
+use bvseg::internals::mvee_of_hull;
+use bvseg::internals::Enclosure;
+use bvseg::internals::Grid;
+use bvseg::internals::Solid;
+use bvseg::internals::{Fitter, MVEE_TOL};
 use bvseg::{BoundingKind, Mesh};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
@@ -34,9 +34,8 @@ fn case(path: &Path) -> Option<Case> {
         .mesh;
     let grid = Grid::from_mesh(&mesh, 20_000).ok()?;
     let solid = Solid::new(grid);
-    let (comps, ncomp) = bvseg::flooding::solid_components(&solid.grid);
-    let mut part = bvseg::initialization::cvt(&solid, &comps, ncomp, 16, 0);
-    bvseg::optimization::optimize(&solid, &comps, &mut part, None, None, 100);
+    let mut part = bvseg::internals::cvt(&solid, 16, 0);
+    bvseg::internals::optimize(&solid, &mut part, None, None, 100);
     let enc = Enclosure::new(&mesh, &solid);
     let members = part.members();
     let parts: Vec<Vec<DVec3>> = (0..members.len())

@@ -26,12 +26,11 @@ use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use bvseg::assignment::{assign, PartMetric, Rule};
-use bvseg::flooding::solid_components;
-use bvseg::initialization::cvt;
-use bvseg::optimization::optimize;
-use bvseg::partition::{Partition, Solid};
-use bvseg::sampling::Grid;
+use bvseg::internals::cvt;
+use bvseg::internals::optimize;
+use bvseg::internals::Grid;
+use bvseg::internals::{assign, PartMetric, Rule};
+use bvseg::internals::{Partition, Solid};
 use bvseg::{segment, Mesh, Params};
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, SamplingMode};
 
@@ -72,16 +71,14 @@ fn shared_mesh(name: &str) -> Option<Mesh> {
 /// A sampled solid with its components and a CVT partition into `k` parts.
 struct Prepared {
     solid: Solid,
-    comps: Vec<u32>,
     part: Partition,
 }
 
 fn prepare(mesh: &Mesh, samples: usize, k: usize) -> Prepared {
     let grid = Grid::from_mesh(mesh, samples).expect("sampling");
-    let (comps, ncomp) = solid_components(&grid);
     let solid = Solid::new(grid);
-    let part = cvt(&solid, &comps, ncomp, k, SEED);
-    Prepared { solid, comps, part }
+    let part = cvt(&solid, k, SEED);
+    Prepared { solid, part }
 }
 
 fn bench_sampling(c: &mut Criterion) {
@@ -111,7 +108,7 @@ fn bench_optimize(c: &mut Criterion) {
             };
             let p = prepare(&mesh, 15_000, 20);
             let mut probe = p.part.clone();
-            let st = optimize(&p.solid, &p.comps, &mut probe, None, None, 100);
+            let st = optimize(&p.solid, &mut probe, None, None, 100);
             eprintln!(
                 "optimize/k20_n15000: mesh {name}, {} samples, k {}, {} sweeps, {} polish moves, F {:.4} -> {:.4}",
                 p.solid.len(),
@@ -126,7 +123,7 @@ fn bench_optimize(c: &mut Criterion) {
         b.iter_batched(
             || p.part.clone(),
             |mut part| {
-                optimize(&p.solid, &p.comps, &mut part, None, None, 100);
+                optimize(&p.solid, &mut part, None, None, 100);
                 part
             },
             BatchSize::SmallInput,

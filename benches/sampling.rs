@@ -1,7 +1,7 @@
 //! Sampling stage: `Grid::from_mesh` (and the inside test alone) on a ~50k-triangle sphere.
 use std::collections::HashMap;
 
-use bvseg::sampling::{inside::inside_cells, Grid};
+use bvseg::internals::{inside_cells, Grid};
 use bvseg::Mesh;
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use glam::DVec3;

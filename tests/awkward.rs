@@ -4,7 +4,7 @@
 #[path = "support/verify_input.rs"]
 mod verify_input;
 
-use bvseg::{segment, shapes, BoundingKind, Error, Mesh, Params, Segmentation};
+use bvseg::{segment, shapes, BoundingKind, Error, Mesh, ParamError, Params, Segmentation};
 use bvseg_verify::{VerifyOptions, VerifyReport};
 use glam::{DMat3, DVec3};
 
@@ -265,7 +265,15 @@ fn k_larger_than_the_samples_is_a_clear_error() {
     let m = shapes::cuboid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY);
     let p = params(200, Some(200 / 8 + 1), BoundingKind::Ellipsoid);
     match segment(&m, &p) {
-        Err(Error::InvalidParams(msg)) => {
+        Err(Error::InvalidParams(e)) => {
+            assert_eq!(
+                e,
+                ParamError::KTooLarge {
+                    value: 26,
+                    samples: 200
+                }
+            );
+            let msg = e.to_string();
             assert!(msg.contains("too large") && !msg.contains('\n'), "{msg}");
         }
         other => panic!("expected InvalidParams, got {other:?}"),

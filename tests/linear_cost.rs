@@ -1,6 +1,6 @@
 //! The work of loading and segmenting a file grows at most linearly with the file, for every
 //! family of awkward inputs in `support/hostile.rs`. Work is counted, not timed
-//! (`bvseg::work`: lattice columns scanned by the inside test, points fitted, outside cells
+//! (`bvseg::internals::work`: lattice columns scanned by the inside test, points fitted, outside cells
 //! counted, vertices and triangles read), so the test is exact on any machine; wall times
 //! are in `benches/hostile.rs`.
 //!
@@ -17,7 +17,7 @@ const UNITS_PER_BYTE: f64 = 8.0;
 
 /// Loads and segments one file; the work it took and whether it was refused.
 fn work(bytes: &[u8], name: &str) -> (u64, Result<(), String>) {
-    let before = bvseg::work::total();
+    let before = bvseg::internals::work::total();
     let outcome = bvseg::io::load_bytes(bytes, name, &bvseg::io::LoadOptions::default())
         .map_err(|e| e.to_string())
         .and_then(|loaded| {
@@ -29,7 +29,7 @@ fn work(bytes: &[u8], name: &str) -> (u64, Result<(), String>) {
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         });
-    (bvseg::work::total() - before, outcome)
+    (bvseg::internals::work::total() - before, outcome)
 }
 
 #[test]

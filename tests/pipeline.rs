@@ -1,6 +1,6 @@
 //! End-to-end properties of the segmentation on analytic shapes and the bundled meshes.
-use bvseg::flooding::{is_connected, solid_components};
-use bvseg::sampling::Grid;
+use bvseg::internals::Grid;
+use bvseg::internals::{is_connected, solid_components};
 use bvseg::shapes::{capsule, ellipsoid, union};
 use bvseg::{segment, BoundingKind, Mesh, Params, Segmentation};
 use glam::{DMat3, DVec3};

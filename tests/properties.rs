@@ -6,13 +6,8 @@
 #[path = "support/verify_input.rs"]
 mod verify_input;
 
-use bvseg::bounding::{legendre::fast_volume, mvee::mvee};
-use bvseg::flooding::solid_components;
-use bvseg::initialization::cvt;
-use bvseg::optimization::{lloyd, polish};
-use bvseg::partition::{Partition, Solid};
-use bvseg::sampling::{Grid, NONE};
-use bvseg::{segment, shapes, BoundingKind, Mesh, Params, Segmentation, Shape};
+use bvseg::internals::{cvt, lloyd, mvee, polish, sym_eigen, Grid, Partition, Solid, NONE};
+use bvseg::{segment, shapes, BoundingKind, BoundingVolume, Mesh, Params, Segmentation, Shape};
 use bvseg_verify::VerifyOptions;
 use glam::{DMat3, DVec3};
 use proptest::prelude::*;
@@ -298,13 +293,12 @@ proptest! {
     fn f_never_increases(prims in solid(), k in 1usize..8, seed in any::<u64>()) {
         let mesh = build(&prims);
         let grid = Grid::from_mesh(&mesh, 2000).expect("grid");
-        let (comps, ncomp) = solid_components(&grid);
         let solid = Solid::new(grid);
-        let mut part = cvt(&solid, &comps, ncomp, k, seed);
+        let mut part = cvt(&solid, k, seed);
         let mut f = part.f();
         prop_assert!(f >= 0.97, "F = {}", f);
         for _ in 0..30 {
-            let kept = lloyd(&solid, &comps, &mut part, None, 1);
+            let kept = lloyd(&solid, &mut part, None, 1);
             let g = part.f();
             prop_assert!(g <= f, "a sweep raised F from {} to {}", f, g);
             f = g;
@@ -339,13 +333,12 @@ proptest! {
     fn mvee_never_larger_than_scaled_legendre(prims in solid(), map in affine(), k in 1usize..5, seed in any::<u64>()) {
         let mesh = apply(&map, &build(&prims));
         let grid = Grid::from_mesh(&mesh, 3000).expect("grid");
-        let (comps, ncomp) = solid_components(&grid);
         let solid = Solid::new(grid);
-        let part = cvt(&solid, &comps, ncomp, k, seed);
+        let part = cvt(&solid, k, seed);
         let members = part.members();
-        for (i, m) in part.parts.iter().enumerate() {
+        for (i, _) in part.parts.iter().enumerate() {
             let pts: Vec<DVec3> = members[i].iter().map(|&s| solid.grid.points[s as usize]).collect();
-            let leg = fast_volume(&solid, m, Shape::Ellipsoid, pts.iter().copied());
+            let leg = scaled_legendre(&pts, solid.grid.h);
             let e = mvee(&pts, 1e-4, 0.5 * solid.grid.h);
             for &p in &pts {
                 prop_assert!(e.contains(p) && leg.contains(p));
@@ -356,6 +349,26 @@ proptest! {
             );
         }
     }
+}
+
+/// The paper's refinement volume: the Legendre ellipsoid of `pts` (each standing for a cell
+/// of side `h`), scaled uniformly until it holds them.
+fn scaled_legendre(pts: &[DVec3], h: f64) -> BoundingVolume {
+    let n = pts.len() as f64;
+    let c = pts.iter().copied().sum::<DVec3>() / n;
+    let mut cov = glam::DMat3::from_diagonal(DVec3::splat(h * h / 12.0));
+    for &p in pts {
+        let d = p - c;
+        cov += glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z) / n;
+    }
+    let (vals, axes) = sym_eigen(cov);
+    BoundingVolume {
+        shape: Shape::Ellipsoid,
+        center: c,
+        axes,
+        radii: DVec3::new(vals.x.sqrt(), vals.y.sqrt(), vals.z.sqrt()),
+    }
+    .scaled_to_contain(pts.iter().copied())
 }
 
 /// The case proptest found: two parts of one piece whose volumes' boxes overlapped, but which

@@ -1,7 +1,7 @@
 //! Bounding volumes of arbitrary small point sets: the hull, the minimum-volume ellipsoid
 //! and the box never panic and always hold every point.
 #![no_main]
-use bvseg_core::bounding::{hull::convex_hull, mvee::mvee, obb::min_obb};
+use bvseg_core::internals::{convex_hull, min_obb, mvee};
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
 

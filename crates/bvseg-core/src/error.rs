@@ -1,13 +1,43 @@
+//! What can go wrong, in layers: the mesh ([`MeshError`]), the parameters ([`ParamError`]),
+//! and the run ([`Error`], which wraps both).
 use thiserror::Error;
 
-/// Everything that can go wrong in [`crate::segment`]. Each variant is a problem with the
-/// input or the parameters; the core never fails on its own account.
+/// Everything that can go wrong in [`crate::segment`]: a problem with the mesh, with the
+/// parameters, or with what the mesh encloses; a cancelled run; or a bug ([`Error::Internal`]).
 #[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum Error {
+    /// The mesh is malformed.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A parameter is out of its valid range.
+    #[error("invalid parameter: {0}")]
+    InvalidParams(#[from] ParamError),
+    /// The mesh is flat or encloses no volume that the sampling grid can see.
+    #[error("the mesh encloses no volume (flat, open or degenerate): {0}")]
+    NoVolume(String),
+    /// The surface is far more complex than the sampling lattice can resolve in bounded
+    /// time (typically a hostile file: many huge overlapping triangles).
+    #[error("the mesh is too complex to sample: {0}")]
+    TooComplex(String),
+    /// A broken invariant inside bvseg (a bug): please report it with the input. Returned
+    /// instead of a result with non-finite figures or volumes.
+    #[error("internal error (please report it with the input): {0}")]
+    Internal(String),
+    /// The run was stopped through its [`crate::Cancel`] flag.
+    #[error("the run was cancelled")]
+    Cancelled,
+}
+
+/// A mesh that [`crate::Mesh::new`] rejects.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum MeshError {
     /// The mesh has no triangles.
     #[error("the mesh has no triangles")]
     NoTriangles,
-    /// A vertex coordinate is NaN or infinite, or too large to be handled in f64 arithmetic.
+    /// A vertex coordinate is NaN or infinite, or too large to be handled in f64 arithmetic
+    /// (beyond [`crate::MAX_COORDINATE`]).
     #[error("vertex {index} has a non-finite or out-of-range coordinate")]
     BadVertex {
         /// Index of the offending vertex.
@@ -23,20 +53,57 @@ pub enum Error {
         /// Number of vertices in the mesh.
         count: usize,
     },
-    /// The mesh is flat or encloses no volume that the sampling grid can see.
-    #[error("the mesh encloses no volume (flat, open or degenerate): {0}")]
-    NoVolume(String),
-    /// The surface is far more complex than the sampling lattice can resolve in bounded
-    /// time (typically a hostile file: many huge overlapping triangles).
-    #[error("the mesh is too complex to sample: {0}")]
-    TooComplex(String),
-    /// A broken invariant inside bvseg (a bug): please report it with the input.
-    #[error("internal error (please report it with the input): {0}")]
-    Internal(String),
-    /// The run was stopped through its [`crate::Cancel`] flag.
-    #[error("the run was cancelled")]
-    Cancelled,
-    /// A parameter is out of its valid range.
-    #[error("invalid parameter: {0}")]
-    InvalidParams(String),
+}
+
+/// A parameter out of its range: one variant per rule of [`crate::Params::validate`], each
+/// with the value given and the range allowed.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ParamError {
+    /// [`crate::Params::samples`] is outside `min..=max`.
+    #[error("samples must be between {min} and {max}, got {value}")]
+    Samples {
+        /// The value given.
+        value: usize,
+        /// Smallest allowed.
+        min: usize,
+        /// Largest allowed ([`crate::MAX_SAMPLES`]).
+        max: usize,
+    },
+    /// [`crate::Params::k`] is 0.
+    #[error("k must be at least 1")]
+    KZero,
+    /// [`crate::Params::k`] is above `samples / 8` (each part needs samples to be fitted).
+    #[error("k = {value} is too large for {samples} samples (at most samples / 8)")]
+    KTooLarge {
+        /// The value given.
+        value: usize,
+        /// The sample count it was given with.
+        samples: usize,
+    },
+    /// [`crate::Params::tov`] or [`crate::Params::mov`] is negative or not finite.
+    #[error("tolerances must be finite and non-negative ({field} = {value})")]
+    Tolerance {
+        /// `"tov"` or `"mov"`.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// [`crate::Params::max_k`] is outside `1..=max`.
+    #[error("max_k must be between 1 and {max}, got {value}")]
+    MaxK {
+        /// The value given.
+        value: usize,
+        /// Largest allowed ([`crate::MAX_K`]).
+        max: usize,
+    },
+    /// [`crate::Params::margin`] is negative or not finite.
+    #[error("margin must be finite and at least 0, got {value}")]
+    Margin {
+        /// The value given.
+        value: f64,
+    },
+    /// [`crate::Params::max_sweeps`] is 0.
+    #[error("max_sweeps must be at least 1")]
+    MaxSweeps,
 }

@@ -14,7 +14,7 @@ use crate::bounding::hull::hull_points;
 use crate::bounding::mvee::mvee_of_hull;
 use crate::bounding::obb::min_obb;
 use crate::enclosure::Enclosure;
-use crate::metrics::outside_cells;
+use crate::metrics::{outside_cells, Cell};
 use crate::moments::Moments;
 use crate::partition::Solid;
 use crate::{BoundingKind, BoundingVolume, Cancel, Mesh};
@@ -31,7 +31,7 @@ pub struct Fit {
     /// The fitted volume.
     pub volume: BoundingVolume,
     /// Lattice cells outside the solid whose centres the volume contains.
-    pub outside: Vec<[i64; 3]>,
+    pub outside: Vec<Cell>,
 }
 
 /// Cache key: the part's exact moments.
@@ -83,7 +83,7 @@ impl Fit {
     fn bytes(&self) -> usize {
         std::mem::size_of::<Fit>()
             + self.hull.len() * std::mem::size_of::<DVec3>()
-            + self.outside.len() * std::mem::size_of::<[i64; 3]>()
+            + self.outside.len() * std::mem::size_of::<Cell>()
     }
 }
 

@@ -17,11 +17,12 @@ const CVT_ITERATIONS: usize = 20;
 
 /// k-means++ seeds, at least one in each component of the solid when `k` allows (largest
 /// components first), so that no part has to span two disjoint pieces.
-fn seeds(solid: &Solid, comps: &[u32], ncomp: usize, k: usize, rng: &mut Rng) -> Vec<usize> {
+fn seeds(solid: &Solid, k: usize, rng: &mut Rng) -> Vec<usize> {
+    let (comps, ncomp) = (&solid.components, solid.pieces);
     let n = solid.len();
     let mut seeds = Vec::with_capacity(k);
     let mut sizes = vec![0usize; ncomp];
-    for &c in comps {
+    for &c in comps.iter() {
         sizes[c as usize] += 1;
     }
     let mut order: Vec<usize> = (0..ncomp).collect();
@@ -85,11 +86,11 @@ fn seeds(solid: &Solid, comps: &[u32], ncomp: usize, k: usize, rng: &mut Rng) ->
 }
 
 /// A connected CVT partition with `k` parts (`k <= samples`).
-pub fn cvt(solid: &Solid, comps: &[u32], ncomp: usize, k: usize, seed: u64) -> Partition {
+pub fn cvt(solid: &Solid, k: usize, seed: u64) -> Partition {
     let n = solid.len();
     let k = k.clamp(1, n);
     let mut rng = Rng::new(seed);
-    let seeds = seeds(solid, comps, ncomp, k, &mut rng);
+    let seeds = seeds(solid, k, &mut rng);
     let all: Vec<u32> = (0..n as u32).collect();
     let cand: Vec<u32> = (0..k as u32).collect();
     let mut metrics: Vec<PartMetric> = seeds
@@ -103,7 +104,7 @@ pub fn cvt(solid: &Solid, comps: &[u32], ncomp: usize, k: usize, seed: u64) -> P
     let mut labels = assign(&solid.q, &all, &metrics, &cand, Rule::Euclidean);
     let mut part = Partition::from_labels(solid, labels.clone(), k);
     for _ in 0..CVT_ITERATIONS {
-        make_connected(&solid.grid, &mut labels, comps, None, |s, j| {
+        make_connected(&solid.grid, &mut labels, &solid.components, None, |s, j| {
             metrics[j as usize].cost(solid.q[s], Rule::Euclidean)
         });
         let next = Partition::from_labels(solid, labels.clone(), k);
@@ -133,7 +134,7 @@ pub fn drop_empty_parts(part: &mut Partition) {
 /// Split part `i` of `part` in two: the new part (label `k`) is seeded at the sample of part
 /// `i` farthest from its centre, and the two halves are formed by a few 2-means steps
 /// within part `i`, kept connected. Returns `None` when part `i` has fewer than 2 samples.
-pub fn split(solid: &Solid, comps: &[u32], part: &Partition, i: usize) -> Option<Partition> {
+pub fn split(solid: &Solid, part: &Partition, i: usize) -> Option<Partition> {
     let members: Vec<u32> = (0..solid.len() as u32)
         .filter(|&s| part.labels[s as usize] == i as u32)
         .collect();
@@ -182,16 +183,22 @@ pub fn split(solid: &Solid, comps: &[u32], part: &Partition, i: usize) -> Option
         cb = nb;
     }
     let (cai, cbi) = (ca, cb);
-    make_connected(&solid.grid, &mut labels, comps, Some(&members), |s, j| {
-        let x = solid.q[s];
-        if j as usize == k {
-            (x - cbi).length_squared()
-        } else if j as usize == i {
-            (x - cai).length_squared()
-        } else {
-            f64::INFINITY
-        }
-    });
+    make_connected(
+        &solid.grid,
+        &mut labels,
+        &solid.components,
+        Some(&members),
+        |s, j| {
+            let x = solid.q[s];
+            if j as usize == k {
+                (x - cbi).length_squared()
+            } else if j as usize == i {
+                (x - cai).length_squared()
+            } else {
+                f64::INFINITY
+            }
+        },
+    );
     let next = Partition::from_labels(solid, labels, k + 1);
     if next.has_empty_part() {
         return None;

@@ -21,59 +21,97 @@
 //! assert_eq!(seg.parts.len(), 1);
 //! ```
 //!
-//! The pipeline, one module per stage: [`sampling`] -> [`moments`] -> [`initialization`] ->
-//! [`assignment`] / [`flooding`] -> [`optimization`] -> [`refinement`] (judged with
-//! [`fitting`]: [`bounding`] volumes of the [`enclosure`] points, measured by [`metrics`]) ->
-//! [`tightening`] -> [`reshaping`] -> [`hierarchy`]. [`Segmenter`] runs it step by step;
-//! [`segment`] runs it to the end.
+//! ## The house
+//!
+//! The data flows one way: [`Mesh`] -> samples (`sampling`) -> partition (`initialization`,
+//! `optimization`) -> volumes (`fitting`, `bounding`, `enclosure`) -> report ([`Segmentation`]).
+//! `pipeline` runs the paper's loop step by step ([`Segmenter`]); `refine` holds its
+//! decisions (split, merge, checkpoint, patience, budget), one file each; the stages it calls
+//! are one module each: `sampling` (the inside test and the lattice), `moments`, `assignment`
+//! and `flooding` (connectivity), `initialization`, `optimization`, `fitting` with
+//! `enclosure` and `bounding`, `metrics` (outside volumes, on two lattices), `tightening`,
+//! `reshaping`, `hierarchy`. All of them are private: the API is this page. [`shapes`] builds
+//! test solids.
 #![warn(missing_docs)]
 // Index loops over 3x3 matrices and parallel arrays read more clearly than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
-pub mod assignment;
-pub mod bounding;
+mod assignment;
+mod bounding;
 mod cancel;
-pub mod enclosure;
+mod enclosure;
 mod error;
-pub mod fitting;
-pub mod flooding;
-pub mod hierarchy;
-pub mod initialization;
-pub mod linalg;
+mod fitting;
+mod flooding;
+mod hierarchy;
+mod initialization;
+mod linalg;
 mod math;
 mod mesh;
-pub mod metrics;
-pub mod moments;
-pub mod optimization;
+mod metrics;
+mod moments;
+mod optimization;
 mod parallel;
 mod params;
-pub mod partition;
-pub mod refinement;
-pub mod reshaping;
+mod partition;
+mod pipeline;
+mod refine;
+mod reshaping;
 mod result;
-pub mod rng;
-pub mod sampling;
+mod rng;
+mod sampling;
 pub mod shapes;
-pub mod tightening;
-pub mod verify;
+mod tightening;
 mod volume;
-#[doc(hidden)]
-pub mod work;
 
 pub use cancel::Cancel;
-pub use error::Error;
-pub use mesh::{Mesh, MAX_COORDINATE};
-pub use params::{BoundingKind, Params, MAX_SAMPLES};
-pub use refinement::Segmenter;
+pub use error::{Error, MeshError, ParamError};
+pub use mesh::{weld, Mesh, MAX_COORDINATE};
+pub use params::{BoundingKind, Params, MAX_K, MAX_SAMPLES};
+pub use pipeline::Segmenter;
 pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind};
 pub use volume::{BoundingVolume, Shape};
 
+/// The stages' own entry points, for the benchmarks, the fuzz targets and the tests that
+/// check one stage at a time. Not part of the API: anything here may change in any release.
+#[doc(hidden)]
+pub mod internals {
+    pub use crate::assignment::{assign, PartMetric, Rule};
+    pub use crate::bounding::hull::{convex_hull, hull_points};
+    pub use crate::bounding::mvee::{mvee, mvee_of_hull};
+    pub use crate::bounding::obb::min_obb;
+    pub use crate::enclosure::Enclosure;
+    pub use crate::fitting::{Fitter, MVEE_TOL};
+    pub use crate::flooding::{is_connected, solid_components};
+    pub use crate::initialization::cvt;
+    pub use crate::linalg::sym_eigen;
+    pub use crate::optimization::{lloyd, optimize, polish};
+    pub use crate::partition::{Partition, Solid};
+    pub use crate::rng::Rng;
+    pub use crate::sampling::{inside::inside_cells, Grid, NONE};
+    /// The count of work done (see `tests/linear_cost.rs`).
+    pub mod work {
+        pub use crate::work::{add, total};
+    }
+}
+mod work;
+
 /// Segment `mesh` and bound each part, with the parameters `params`.
+///
+/// # Errors
+///
+/// [`Error::InvalidParams`] for parameters out of range, [`Error::NoVolume`] when the mesh
+/// encloses nothing the lattice can see, [`Error::TooComplex`] for surfaces beyond the inside
+/// test's work bound, [`Error::Internal`] for a bug.
 pub fn segment(mesh: &Mesh, params: &Params) -> Result<Segmentation, Error> {
     segment_with(mesh, params, |_| {})
 }
 
 /// Like [`segment`], calling `on_step` after every refinement step (for progress display).
+///
+/// # Errors
+///
+/// As [`segment`].
 pub fn segment_with(
     mesh: &Mesh,
     params: &Params,

@@ -32,14 +32,13 @@ const MIN_GAIN: f64 = 1e-7;
 /// only among them; the refinement uses this to re-optimise locally after a split.
 pub fn optimize(
     solid: &Solid,
-    comps: &[u32],
     part: &mut Partition,
     lloyd_parts: Option<&[u32]>,
     polish_parts: Option<&[u32]>,
     max_sweeps: usize,
 ) -> OptStats {
     let f_before = part.f();
-    let sweeps = lloyd(solid, comps, part, lloyd_parts, max_sweeps);
+    let sweeps = lloyd(solid, part, lloyd_parts, max_sweeps);
     let moves = polish(solid, part, polish_parts);
     OptStats {
         sweeps,
@@ -52,7 +51,6 @@ pub fn optimize(
 /// Lloyd sweeps; returns how many were kept.
 pub fn lloyd(
     solid: &Solid,
-    comps: &[u32],
     part: &mut Partition,
     active: Option<&[u32]>,
     max_sweeps: usize,
@@ -141,7 +139,7 @@ pub fn lloyd(
             make_connected(
                 &solid.grid,
                 &mut part.labels,
-                comps,
+                &solid.components,
                 Some(&scope),
                 |s, j| {
                     if is_active[j as usize] {
@@ -522,7 +520,7 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flooding::{is_connected, solid_components};
+    use crate::flooding::is_connected;
     use crate::initialization::cvt;
     use crate::sampling::Grid;
     use glam::DVec3;
@@ -558,13 +556,12 @@ mod tests {
                 && !hole
         });
         let solid = Solid::new(g);
-        let (comps, ncomp) = solid_components(&solid.grid);
         let g = &solid.grid;
         let mut rng = crate::rng::Rng::new(7);
         let (mut passed, mut flagged) = (0, 0);
         for round in 0..200 {
             let k = 3 + round % 6;
-            let part = cvt(&solid, &comps, ncomp, k, round as u64);
+            let part = cvt(&solid, k, round as u64);
             let mut labels = part.labels.clone();
             let mut prev = vec![NONE; labels.len()];
             let mut moved = Vec::new();
@@ -603,14 +600,13 @@ mod tests {
     #[test]
     fn optimisation_never_raises_f_and_keeps_parts_connected() {
         let solid = Solid::new(l_shape());
-        let (comps, _) = solid_components(&solid.grid);
         for seed in 0..4 {
-            let mut part = cvt(&solid, &comps, 1, 5, seed);
-            let stats = optimize(&solid, &comps, &mut part, None, None, 100);
+            let mut part = cvt(&solid, 5, seed);
+            let stats = optimize(&solid, &mut part, None, None, 100);
             assert!(stats.f_after <= stats.f_before, "{stats:?}");
             assert!(stats.f_after >= 1.0);
             assert_eq!(part.k(), 5);
-            assert!(is_connected(&solid.grid, &part.labels, &comps));
+            assert!(is_connected(&solid.grid, &part.labels, &solid.components));
             // Moments stay exactly those of the labels.
             let fresh = Partition::from_labels(&solid, part.labels.clone(), 5);
             assert_eq!(fresh, part);
@@ -620,9 +616,8 @@ mod tests {
     #[test]
     fn two_parts_of_an_l_are_its_two_arms() {
         let solid = Solid::new(l_shape());
-        let (comps, _) = solid_components(&solid.grid);
-        let mut part = cvt(&solid, &comps, 1, 2, 1);
-        optimize(&solid, &comps, &mut part, None, None, 100);
+        let mut part = cvt(&solid, 2, 1);
+        optimize(&solid, &mut part, None, None, 100);
         // Box-like parts: F close to a box's e (1.127), far below the single-part F.
         let one = Partition::from_labels(&solid, vec![0; solid.len()], 1);
         assert!(

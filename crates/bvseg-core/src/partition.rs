@@ -7,13 +7,15 @@
 //! is lost by working in these units.
 use glam::DVec3;
 
+use crate::flooding::solid_components;
 use crate::moments::Moments;
 use crate::sampling::Grid;
 
 /// Covariance of a unit cube cell (lattice units): `h^2 / 12` with `h = 1`.
 pub const CELL_VAR: f64 = 1.0 / 12.0;
 
-/// The sampled solid in lattice units.
+/// The sampled solid in lattice units, with its connected pieces: every stage that keeps
+/// parts connected needs them, so they travel with the samples.
 #[derive(Debug, Clone)]
 pub struct Solid {
     /// The sampling grid.
@@ -22,10 +24,14 @@ pub struct Solid {
     pub q: Vec<DVec3>,
     /// Lattice coordinate that `q = 0` stands for.
     pub offset: [i64; 3],
+    /// For each sample, the connected piece of the solid it lies in (face-adjacent samples).
+    pub components: Vec<u32>,
+    /// Number of connected pieces.
+    pub pieces: usize,
 }
 
 impl Solid {
-    /// Wrap a grid.
+    /// Wrap a grid, finding its connected pieces.
     pub fn new(grid: Grid) -> Self {
         let offset = [
             (grid.dims[0] / 2) as i64,
@@ -43,7 +49,14 @@ impl Solid {
                 )
             })
             .collect();
-        Self { grid, q, offset }
+        let (components, pieces) = solid_components(&grid);
+        Self {
+            grid,
+            q,
+            offset,
+            components,
+            pieces,
+        }
     }
 
     /// Number of samples.
@@ -66,17 +79,6 @@ impl Solid {
                     self.offset[1] as f64,
                     self.offset[2] as f64,
                 ))
-    }
-
-    /// Lattice-unit position of a world point.
-    #[inline]
-    pub fn to_lattice(&self, p: DVec3) -> DVec3 {
-        (p - self.grid.origin) / self.grid.h
-            - DVec3::new(
-                self.offset[0] as f64,
-                self.offset[1] as f64,
-                self.offset[2] as f64,
-            )
     }
 }
 
@@ -126,6 +128,26 @@ impl Partition {
         self.parts[from as usize].remove(q);
         self.parts[to as usize].add(q);
         self.labels[s] = to;
+    }
+
+    /// Each part's number of samples.
+    pub fn counts(&self) -> Vec<f64> {
+        self.parts.iter().map(|m| m.n).collect()
+    }
+
+    /// This partition with part `b` merged into part `a`; labels above `b` shift down.
+    pub fn merged(&self, a: usize, b: usize) -> Self {
+        let mut part = self.clone();
+        for l in part.labels.iter_mut() {
+            if *l as usize == b {
+                *l = a as u32;
+            }
+        }
+        let mb = part.parts[b];
+        part.parts[a] = part.parts[a].merged(&mb);
+        part.parts[b] = Moments::default();
+        part.remove_empty_part(b);
+        part
     }
 
     /// Whether some part has no sample.

@@ -26,9 +26,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::math;
 
-use crate::metrics::{outside_cells, outside_cells_while, relative, LATTICES};
+use crate::metrics::{outside_cells, outside_cells_while, relative, Cell, Coverage, LATTICES};
 use crate::partition::Solid;
-use crate::tightening::Coverage;
 use crate::volume::{BoundingVolume, Shape};
 
 /// Number of halvings of the step sizes before the search of one volume stops.
@@ -53,11 +52,11 @@ pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
     volumes: &[BoundingVolume],
-    mut cells: Vec<Vec<[i64; 3]>>,
+    mut cells: Vec<Vec<Cell>>,
     counts: &[f64],
     min_r: f64,
     budget: u64,
-) -> (Vec<BoundingVolume>, Vec<Vec<[i64; 3]>>) {
+) -> (Vec<BoundingVolume>, Vec<Vec<Cell>>) {
     let grid = &solid.grid;
     // Cells the trials visited. Each trial's count is fixed by its volume and the round's
     // best, so the total after a round does not depend on the thread count.

@@ -44,7 +44,7 @@ pub enum StepKind {
     /// Two adjacent parts were merged.
     Merge,
     /// Boundary layers moved between parts to lower the outside volume (a checkpoint of
-    /// the tightening during refinement, see [`crate::refinement`]).
+    /// the tightening during refinement).
     Tighten,
     /// The final bounding volumes (minimum-volume ellipsoids / boxes) were fitted.
     Final,
@@ -94,6 +94,7 @@ pub struct HierarchyNode {
 
 /// The result of [`crate::segment`].
 #[derive(Debug, Clone, PartialEq)]
+#[must_use]
 pub struct Segmentation {
     /// The bounding-volume kind that was requested.
     pub kind: BoundingKind,
@@ -113,7 +114,7 @@ pub struct Segmentation {
     /// The lattice cell size that was used.
     pub cell_size: f64,
     /// Whether the run's bound on work cut refinement, merging or the polish short (see
-    /// [`crate::refinement::WORK_PER_SAMPLE`]): the volumes still enclose the mesh, but more
+    /// the crate's docs on awkward inputs): the volumes still enclose the mesh, but more
     /// work would have made them tighter. Happens on solids of many specks scattered over a
     /// large box, not on ordinary models.
     pub budget_exhausted: bool,
@@ -125,10 +126,81 @@ impl Segmentation {
     /// tolerances to meet. The one rule the CLI, the summary and the viewer share.
     #[must_use]
     pub fn tolerances_met(&self, params: &crate::Params) -> Option<bool> {
-        let m = self.metrics;
+        let figures = crate::refine::Figures {
+            tov: self.metrics.tov,
+            mov: self.metrics.mov,
+        };
         params
             .k
             .is_none()
-            .then_some(m.tov < params.tov && m.mov < params.mov)
+            .then(|| crate::refine::Tolerances::of(params).met(figures))
+    }
+
+    /// The invariants every result keeps, checked before it is returned: one volume per part,
+    /// finite figures and volumes, parts and labels in range. A broken one is a bug, reported
+    /// as [`crate::Error::Internal`] instead of a result with NaNs in it.
+    pub(crate) fn check(&self) -> Result<(), crate::Error> {
+        let bad = |what: &str| Err(crate::Error::Internal(what.to_owned()));
+        let k = self.parts.len();
+        if k == 0 || self.metrics.k != k {
+            return bad("the part count is inconsistent");
+        }
+        let m = &self.metrics;
+        if ![m.f, m.tov, m.mov].iter().all(|x| x.is_finite()) {
+            return bad("a figure of the result is not finite");
+        }
+        let finite = |v: &BoundingVolume| {
+            v.center.is_finite()
+                && v.radii.is_finite()
+                && v.axes.is_finite()
+                && v.radii.min_element() >= 0.0
+        };
+        if !self
+            .parts
+            .iter()
+            .all(|p| finite(&p.volume) && p.ov.is_finite())
+        {
+            return bad("a volume of the result is not finite");
+        }
+        if !self.hierarchy.iter().all(|n| finite(&n.volume)) {
+            return bad("a volume of the hierarchy is not finite");
+        }
+        let in_range = |l: &u32| (*l as usize) < k;
+        if !self.triangle_parts.iter().all(in_range) || !self.sample_parts.iter().all(in_range) {
+            return bad("a label of the result is out of range");
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{segment, shapes, Error, Params};
+    use glam::DVec3;
+
+    #[test]
+    fn a_result_with_a_nan_is_an_internal_error() {
+        let mesh = shapes::ellipsoid(
+            DVec3::ZERO,
+            DVec3::new(2.0, 1.0, 1.0),
+            glam::DMat3::IDENTITY,
+            12,
+        );
+        let params = Params {
+            samples: 1000,
+            k: Some(2),
+            ..Params::default()
+        };
+        let seg = segment(&mesh, &params).unwrap();
+        assert_eq!(seg.check(), Ok(()));
+        let mut broken = seg.clone();
+        broken.parts[0].volume.radii.x = f64::NAN;
+        assert!(matches!(broken.check(), Err(Error::Internal(_))));
+        let mut broken = seg.clone();
+        broken.metrics.tov = f64::NAN;
+        assert!(matches!(broken.check(), Err(Error::Internal(_))));
+        let mut broken = seg;
+        broken.sample_parts[0] = 7;
+        assert!(matches!(broken.check(), Err(Error::Internal(_))));
     }
 }

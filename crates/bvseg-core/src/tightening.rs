@@ -12,9 +12,10 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::fitting::{Fit, Fitter};
-use crate::metrics::{is_offset_cell, relative, OFFSET_TAG};
+use crate::metrics::{relative, Coverage};
 use crate::moments::Moments;
 use crate::partition::{Partition, Solid};
+use crate::pipeline::Context;
 use crate::sampling::NONE;
 use crate::Mesh;
 
@@ -24,140 +25,6 @@ const REACH: f64 = 1.15;
 
 /// A pass that lowers TOV by less than this ends the tightening.
 const MIN_PASS_GAIN: f64 = 1e-3;
-
-/// How many volumes cover each lattice cell outside the solid (of both lattices, see
-/// [`crate::metrics`]), and how many such cells are covered at all.
-#[derive(Debug, Clone)]
-pub struct Coverage {
-    lo: [i64; 3],
-    n: [i64; 3],
-    count: Vec<u16>,
-    count_offset: Vec<u16>,
-    extra: HashMap<[i64; 3], u32>,
-    /// Number of covered cells of both lattices (`LATTICES` times the union's outside volume
-    /// in cells).
-    pub union: usize,
-}
-
-impl Coverage {
-    /// An empty coverage over the solid's lattices with a margin of half their size around
-    /// them (cells beyond fall back to a hash map).
-    pub fn new(solid: &Solid) -> Self {
-        let d = solid.grid.dims;
-        let m = [
-            d[0] as i64 / 2 + 2,
-            d[1] as i64 / 2 + 2,
-            d[2] as i64 / 2 + 2,
-        ];
-        let lo = [-m[0], -m[1], -m[2]];
-        let n = [
-            d[0] as i64 + 2 * m[0],
-            d[1] as i64 + 2 * m[1],
-            d[2] as i64 + 2 * m[2],
-        ];
-        let len = (n[0] * n[1] * n[2]) as usize;
-        Self {
-            lo,
-            n,
-            count: vec![0; len],
-            count_offset: vec![0; len],
-            extra: HashMap::new(),
-            union: 0,
-        }
-    }
-
-    /// Index of cell `c` (tagged or not) in its lattice's dense array, if it is in range.
-    #[inline]
-    fn index(&self, c: &[i64; 3]) -> Option<(bool, usize)> {
-        let offset = is_offset_cell(c);
-        let x = if offset { c[0] - OFFSET_TAG } else { c[0] };
-        let r = [x - self.lo[0], c[1] - self.lo[1], c[2] - self.lo[2]];
-        (0..3).all(|d| r[d] >= 0 && r[d] < self.n[d]).then(|| {
-            (
-                offset,
-                (r[0] + self.n[0] * (r[1] + self.n[1] * r[2])) as usize,
-            )
-        })
-    }
-
-    #[inline]
-    fn slot(&mut self, c: &[i64; 3]) -> Option<&mut u16> {
-        let (offset, i) = self.index(c)?;
-        Some(if offset {
-            &mut self.count_offset[i]
-        } else {
-            &mut self.count[i]
-        })
-    }
-
-    /// Whether cell `c` is covered at least once.
-    pub fn covered(&self, c: &[i64; 3]) -> bool {
-        match self.index(c) {
-            Some((true, i)) => self.count_offset[i] > 0,
-            Some((false, i)) => self.count[i] > 0,
-            None => self.extra.get(c).is_some_and(|&v| v > 0),
-        }
-    }
-
-    /// Cover `cells` once more.
-    pub fn add(&mut self, cells: &[[i64; 3]]) {
-        for c in cells {
-            let was = match self.slot(c) {
-                Some(v) => {
-                    *v += 1;
-                    *v - 1
-                }
-                None => {
-                    let v = self.extra.entry(*c).or_insert(0);
-                    *v += 1;
-                    (*v - 1) as u16
-                }
-            };
-            if was == 0 {
-                self.union += 1;
-            }
-        }
-    }
-
-    /// The union after replacing the cells of `old` volumes by those of `new` ones; the
-    /// coverage is left as it was.
-    pub fn union_if(&mut self, old: [&[[i64; 3]]; 2], new: [&[[i64; 3]]; 2]) -> usize {
-        self.replace(old, new);
-        let union = self.union;
-        self.replace(new, old);
-        union
-    }
-
-    /// Replace the cells of `old` volumes by those of `new` ones.
-    pub fn replace(&mut self, old: [&[[i64; 3]]; 2], new: [&[[i64; 3]]; 2]) {
-        for c in old {
-            self.remove(c);
-        }
-        for c in new {
-            self.add(c);
-        }
-    }
-
-    /// Undo one [`Coverage::add`] of `cells`.
-    pub fn remove(&mut self, cells: &[[i64; 3]]) {
-        for c in cells {
-            let now = match self.slot(c) {
-                Some(v) => {
-                    *v -= 1;
-                    *v
-                }
-                None => {
-                    let v = self.extra.entry(*c).or_insert(1);
-                    *v -= 1;
-                    *v as u16
-                }
-            };
-            if now == 0 {
-                self.union -= 1;
-            }
-        }
-    }
-}
 
 /// A candidate move: the samples of `from` that touch `to` go to `to`.
 struct Move {
@@ -170,13 +37,7 @@ struct Move {
 
 /// Whether the samples of `label` other than those in `layer` (sorted) form one connected
 /// piece per component of the solid.
-fn stays_connected(
-    solid: &Solid,
-    comps: &[u32],
-    part: &Partition,
-    label: u32,
-    layer: &[u32],
-) -> bool {
+fn stays_connected(solid: &Solid, part: &Partition, label: u32, layer: &[u32]) -> bool {
     let g = &solid.grid;
     let inside = |s: u32| part.labels[s as usize] == label && layer.binary_search(&s).is_err();
     let mut seen = vec![false; solid.len()];
@@ -185,7 +46,7 @@ fn stays_connected(
         if !inside(s) || seen[s as usize] {
             continue;
         }
-        let c = comps[s as usize];
+        let c = solid.components[s as usize];
         if per_comp.insert(c, true).is_some() {
             return false;
         }
@@ -322,22 +183,21 @@ fn apply(part: &mut Partition, mv: &Move) {
     part.parts[mv.to as usize] = mv.m_to;
 }
 
-/// Run up to `passes` passes of boundary-layer moves on `part`, of which at most
-/// `full_passes` judge every move (the others only the moves that gained before: see the
-/// comment on `last_gain`); returns the moves made.
-/// `mov_tol` is the per-part tolerance (sigma_L) a move may not push a part's OV past
-/// (unless that part was already past it).
-#[allow(clippy::too_many_arguments)]
-pub fn tighten(
-    mesh: &Mesh,
-    solid: &Solid,
-    comps: &[u32],
-    fitter: &mut Fitter,
-    part: &mut Partition,
-    passes: usize,
-    full_passes: usize,
-    mov_tol: f64,
-) -> usize {
+/// How long a tightening runs: up to `total` passes, of which at most `full` judge every move
+/// (the others only the moves that gained before: see the comment on `last_gain`).
+#[derive(Debug, Clone, Copy)]
+pub struct Passes {
+    pub total: usize,
+    pub full: usize,
+}
+
+/// Run boundary-layer moves on `part` for `passes`; returns the moves made. A move may not
+/// push a part's OV past the per-part tolerance (`params.mov`, sigma_L) unless that part was
+/// already past it.
+pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize {
+    let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
+    let (full_passes, mov_tol) = (passes.full, ctx.params.mov);
+    let passes = passes.total;
     let g = &solid.grid;
     let max_full = full_passes.max(1);
     let mut fits: Vec<Arc<Fit>> = fitter.fit_all(mesh, solid, &part.labels, &part.parts);
@@ -417,7 +277,7 @@ pub fn tighten(
                 [fa.outside.as_slice(), fb.outside.as_slice()],
             );
             if cov.union_if(old, new) >= cov.union
-                || !stays_connected(solid, comps, part, mv.from, &mv.layer)
+                || !stays_connected(solid, part, mv.from, &mv.layer)
             {
                 continue;
             }
@@ -446,18 +306,10 @@ pub fn tighten(
 
 /// Beyond the paper, for tolerance mode: while MOV is out of tolerance, move a layer between
 /// the part with the largest OV and one of its neighbours (either way) when that lowers MOV
-/// and keeps TOV under `max(current TOV, tov_tol)`. Up to `steps` moves; returns how many.
-#[allow(clippy::too_many_arguments)]
-pub fn relieve_worst(
-    mesh: &Mesh,
-    solid: &Solid,
-    comps: &[u32],
-    fitter: &mut Fitter,
-    part: &mut Partition,
-    steps: usize,
-    tov_tol: f64,
-    mov_tol: f64,
-) -> usize {
+/// and keeps TOV under `max(current TOV, params.tov)`. Up to `steps` moves; returns how many.
+pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> usize {
+    let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
+    let (tov_tol, mov_tol) = (ctx.params.tov, ctx.params.mov);
     let total = solid.len() as f64;
     let min_part = min_part(solid, part);
     let mut moves = 0;
@@ -513,7 +365,7 @@ pub fn relieve_worst(
             break;
         };
         let mv = &cands[i];
-        if !stays_connected(solid, comps, part, mv.from, &mv.layer) {
+        if !stays_connected(solid, part, mv.from, &mv.layer) {
             break;
         }
         apply(part, mv);

@@ -57,7 +57,7 @@ pub enum IoError {
         /// The file, as the caller named it.
         name: String,
         /// Why the core rejected it.
-        source: bvseg_core::Error,
+        source: bvseg_core::MeshError,
     },
     /// The file's extension names a format this crate cannot read or write.
     #[error("{name}: unsupported {what} format{} (supported: {supported})", ext.as_ref().map(|e| format!(" '.{e}'")).unwrap_or_else(|| " (no file extension)".into()))]

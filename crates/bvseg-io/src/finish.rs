@@ -1,8 +1,7 @@
 //! The step every reader ends with: check the raw triangles, weld, drop degenerate
 //! triangles, turn an inward-facing surface outward, and describe the result.
-use std::collections::HashMap;
 
-use bvseg_core::Mesh;
+use bvseg_core::{weld, Mesh};
 use glam::DVec3;
 
 use crate::report::MeshReport;
@@ -113,7 +112,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
             message: "too many vertices (more than 2^32)".into(),
         });
     }
-    bvseg_core::work::add(positions.len() + triangles.len());
+    bvseg_core::internals::work::add(positions.len() + triangles.len());
     let vertices_read = positions.len();
     let triangles_read = triangles.len();
     let (vertices, remap) = weld(&positions);
@@ -164,25 +163,4 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
         report,
         dropped,
     })
-}
-
-/// Merges vertices whose coordinates are bit-identical (with -0.0 taken as 0.0), keeping the
-/// first occurrence and the order of first occurrences, so that the result does not depend on
-/// hashing. Returns the vertices and, for each input vertex, its new index.
-fn weld(positions: &[DVec3]) -> (Vec<DVec3>, Vec<u32>) {
-    // Adding 0.0 turns -0.0 into +0.0 and leaves every other value unchanged.
-    let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
-    let mut index: HashMap<[u64; 3], u32> = HashMap::with_capacity(positions.len());
-    let mut vertices = Vec::with_capacity(positions.len());
-    let remap = positions
-        .iter()
-        .map(|&p| {
-            *index.entry(key(p)).or_insert_with(|| {
-                vertices.push(p);
-                // Bounded by the caller's check that there are at most 2^32 positions.
-                (vertices.len() - 1) as u32
-            })
-        })
-        .collect();
-    (vertices, remap)
 }

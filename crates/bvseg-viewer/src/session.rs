@@ -6,7 +6,6 @@
 //! history can be stepped back through after (and during) the run.
 use std::sync::Arc;
 
-use bvseg_core::sampling::{Grid, NONE};
 use bvseg_core::{BoundingVolume, Error, Mesh, Params, Segmentation, Segmenter, Step, StepKind};
 use web_time::{Duration, Instant};
 
@@ -47,8 +46,6 @@ pub struct Session {
     mesh: Arc<Mesh>,
     params: Params,
     stage: Stage,
-    /// For each triangle, a sample next to it, to colour the mesh by the samples' parts.
-    triangle_samples: Vec<u32>,
     samples: usize,
     snapshots: Vec<Snapshot>,
     /// Time spent inside the core so far (not counting the frames in between).
@@ -77,7 +74,6 @@ impl Session {
             mesh,
             params,
             stage: Stage::Sampling,
-            triangle_samples: Vec::new(),
             samples: 0,
             snapshots: Vec::new(),
             busy: Duration::ZERO,
@@ -108,10 +104,7 @@ impl Session {
             Stage::Sampling => {
                 match Segmenter::new(&self.mesh, &self.params) {
                     Ok(seg) => {
-                        self.samples = seg.grid().len();
-                        if self.mesh.triangles().len() <= MAX_SNAPSHOT_TRIANGLES {
-                            self.triangle_samples = triangle_samples(&self.mesh, seg.grid());
-                        }
+                        self.samples = seg.samples();
                         self.stage = Stage::Stepping(Box::new(seg));
                     }
                     Err(e) => {
@@ -182,14 +175,16 @@ impl Session {
             }
         }
         let n = labels.len().max(1) as f64;
-        let triangle_parts = self
-            .triangle_samples
-            .iter()
-            .map(|&s| match labels.get(s as usize) {
-                Some(&l) => u16::try_from(l).unwrap_or(UNKNOWN_PART),
-                None => UNKNOWN_PART,
-            })
-            .collect();
+        // The core's own rule (each triangle goes with its nearest sample), so that the colours
+        // during the run are those of the result.
+        let triangle_parts = if self.mesh.triangles().len() <= MAX_SNAPSHOT_TRIANGLES {
+            seg.triangle_parts()
+                .into_iter()
+                .map(|l| u16::try_from(l).unwrap_or(UNKNOWN_PART))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Snapshot {
             step,
             volumes: Arc::new(volumes),
@@ -255,39 +250,6 @@ impl Session {
     }
 }
 
-/// For each triangle, the interior sample nearest to its centroid among the lattice cells
-/// around it ([`NONE`] when there is none within three cells, as for a sliver far from the
-/// solid). Surface triangles touch the solid's boundary cells, so nearly all find one.
-pub fn triangle_samples(mesh: &Mesh, grid: &Grid) -> Vec<u32> {
-    (0..mesh.triangles().len())
-        .map(|t| {
-            let [a, b, c] = mesh.corners(t);
-            let p = (a + b + c) / 3.0;
-            let [ci, cj, ck] = grid.cell_of(p);
-            for r in 1..=3i64 {
-                let mut best = (f64::INFINITY, NONE);
-                for dk in -r..=r {
-                    for dj in -r..=r {
-                        for di in -r..=r {
-                            let s = grid.sample_at(ci + di, cj + dj, ck + dk);
-                            if s != NONE {
-                                let d = grid.points[s as usize].distance_squared(p);
-                                if d < best.0 {
-                                    best = (d, s);
-                                }
-                            }
-                        }
-                    }
-                }
-                if best.1 != NONE {
-                    return best.1;
-                }
-            }
-            NONE
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -317,18 +279,12 @@ mod tests {
         assert_eq!(last.volumes.len(), 4);
         assert_eq!(last.triangle_parts.len(), mesh.triangles().len());
         assert!(last.triangle_parts.iter().all(|&p| p < 4));
+        // The colours follow the core's triangle rule: at the end, the result's parts.
+        let expect: Vec<u16> = res.triangle_parts.iter().map(|&p| p as u16).collect();
+        assert_eq!(*last.triangle_parts, expect);
         // Stepping gives what the one-call API gives.
         let direct = bvseg_core::segment(&mesh, &params).unwrap();
         assert_eq!(direct.metrics, res.metrics);
-    }
-
-    #[test]
-    fn nearly_every_triangle_finds_a_sample() {
-        let mesh = load_bundled(&BUNDLED[1]).unwrap();
-        let grid = Grid::from_mesh(&mesh, 5000).unwrap();
-        let ts = triangle_samples(&mesh, &grid);
-        let missing = ts.iter().filter(|&&s| s == NONE).count();
-        assert!(missing * 100 < ts.len(), "{missing} of {}", ts.len());
     }
 
     #[test]

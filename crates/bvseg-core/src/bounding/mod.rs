@@ -6,6 +6,5 @@
 //! - [`obb`]: a tight oriented bounding box (output).
 //! - [`hull`]: the convex hull, which both of the above work on.
 pub mod hull;
-pub mod legendre;
 pub mod mvee;
 pub mod obb;

@@ -135,11 +135,11 @@ pub(crate) fn inside_cells_within(
     spend(z.scans(&pts, &tris))?;
     // The topology check costs about as much as the z pass; overlap them when possible.
     #[cfg(feature = "parallel")]
-    let (wz, closed) = rayon::join(|| z.windings(&pts, &tris), || is_closed(mesh));
+    let (wz, closed) = rayon::join(|| z.windings(&pts, &tris), || mesh.is_closed());
     #[cfg(not(feature = "parallel"))]
     let (wz, closed) = {
         let w = z.windings(&pts, &tris);
-        let closed = z.all_columns_close(&w) && is_closed(mesh);
+        let closed = z.all_columns_close(&w) && mesh.is_closed();
         (w, closed)
     };
     if closed && z.all_columns_close(&wz) {
@@ -568,95 +568,10 @@ fn exact_sign(w: f64, a: [f64; 2], b: [f64; 2]) -> i32 {
     }
 }
 
-/// Whether every edge is traversed equally often in both directions (the surface is a
-/// closed 2-cycle, so every ray's winding returns to 0). Equal positions under different
-/// indices (unwelded meshes) are merged first if the indices alone do not close.
-fn is_closed(mesh: &Mesh) -> bool {
-    let tris = mesh.triangles();
-    let n = mesh.vertices().len();
-    edges_balance(tris, n, |i| i) || {
-        let canon = weld(mesh.vertices());
-        edges_balance(tris, n, |i| canon[i as usize])
-    }
-}
-
-/// For each vertex, the first vertex with exactly the same position. Linear probing in a
-/// table keyed by the coordinate bits: deterministic and O(n), where a sort of a
-/// triangle soup's vertices would dominate the whole inside test.
-fn weld(verts: &[DVec3]) -> Vec<u32> {
-    // Indices are u32, so vertices beyond u32::MAX are never referenced.
-    let n = verts.len().min(u32::MAX as usize);
-    // +0.0 turns -0.0 into 0.0 so that both weld.
-    let key = |i: u32| {
-        (verts[i as usize] + DVec3::ZERO)
-            .to_array()
-            .map(f64::to_bits)
-    };
-    let hash = |k: [u64; 3]| {
-        let mut x = k[0] ^ k[1].rotate_left(21) ^ k[2].rotate_left(42);
-        // splitmix64 finaliser.
-        x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (x ^ (x >> 31)) as usize
-    };
-    let mask = (2 * n).next_power_of_two() - 1;
-    let mut table = vec![u32::MAX; mask + 1];
-    let mut canon = vec![0u32; n];
-    for i in 0..n as u32 {
-        let k = key(i);
-        let mut slot = hash(k) & mask;
-        canon[i as usize] = loop {
-            match table[slot] {
-                u32::MAX => {
-                    table[slot] = i;
-                    break i;
-                }
-                j if key(j) == k => break j,
-                _ => slot = (slot + 1) & mask,
-            }
-        };
-    }
-    canon
-}
-
-/// Whether the multiset of directed edges (vertex ids through `id`, all below `n`) equals
-/// its reverse. Edges are bucketed by their smaller end (a counting sort), so only the few
-/// edges around each vertex need comparing.
-fn edges_balance(tris: &[[u32; 3]], n: usize, id: impl Fn(u32) -> u32) -> bool {
-    let edges = || {
-        tris.iter().flat_map(|t| {
-            (0..3).filter_map(|e| {
-                let (a, b) = (id(t[e]), id(t[(e + 1) % 3]));
-                (a != b).then_some((a.min(b), a.max(b), a < b))
-            })
-        })
-    };
-    let mut start = vec![0usize; n + 1];
-    for (lo, _, _) in edges() {
-        start[lo as usize + 1] += 1;
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut items = vec![0u64; start[n]];
-    for (lo, hi, up) in edges() {
-        items[fill[lo as usize]] = (u64::from(hi) << 1) | u64::from(up);
-        fill[lo as usize] += 1;
-    }
-    (0..n).all(|v| {
-        let bucket = &mut items[start[v]..start[v + 1]];
-        bucket.sort_unstable();
-        // Within each run of one edge, as many items going up as going down.
-        bucket
-            .chunk_by(|x, y| x >> 1 == y >> 1)
-            .all(|run| 2 * run.iter().filter(|&&x| x & 1 == 1).count() == run.len())
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::edges_balance;
     use glam::DQuat;
     use std::collections::HashMap;
 
@@ -694,20 +609,11 @@ mod tests {
         }
         /// Indexed mesh with equal positions merged (so the topology is visible by index).
         fn welded(&self) -> Mesh {
-            let mut id = HashMap::new();
-            let mut verts = Vec::new();
+            let (verts, remap) = crate::mesh::weld(&self.verts);
             let tris = self
                 .tris
                 .iter()
-                .map(|t| {
-                    t.map(|i| {
-                        let p = self.verts[i as usize];
-                        *id.entry(p.to_array().map(f64::to_bits)).or_insert_with(|| {
-                            verts.push(p);
-                            verts.len() as u32 - 1
-                        })
-                    })
-                })
+                .map(|t| t.map(|i| remap[i as usize]))
                 .collect();
             Mesh::new(verts, tris).unwrap()
         }
@@ -931,7 +837,7 @@ mod tests {
             let s = cube(DVec3::new(2.0, 3.0, 1.0), DVec3::new(7.0, 8.0, 11.0), n);
             // The unwelded soup is closed only once equal positions are merged.
             assert!(!edges_balance(s.soup().triangles(), s.verts.len(), |i| i));
-            assert!(is_closed(&s.soup()));
+            assert!(s.soup().is_closed());
             for mesh in [s.welded(), s.soup(), s.clone().flipped().welded()] {
                 let got = inside_cells(&mesh, DVec3::ZERO, 1.0, dims).unwrap();
                 assert_eq!(count(&got), 5 * 5 * 10);
@@ -1074,7 +980,7 @@ mod tests {
             holed.tris.remove(t);
         }
         let holed = holed.welded();
-        assert!(!is_closed(&holed));
+        assert!(!holed.is_closed());
         let got = inside_cells(&holed, origin, h, dims).unwrap();
         let diff = got.iter().zip(&reference).filter(|(a, b)| a != b).count() as f64;
         assert!(diff / n_ref < 0.01, "{diff} cells differ out of {n_ref}");
@@ -1085,7 +991,7 @@ mod tests {
             flipped.tris[t].swap(0, 1);
         }
         let flipped = flipped.welded();
-        assert!(!is_closed(&flipped));
+        assert!(!flipped.is_closed());
         let got = inside_cells(&flipped, origin, h, dims).unwrap();
         let diff = got.iter().zip(&reference).filter(|(a, b)| a != b).count() as f64;
         assert!(diff / n_ref < 0.01, "{diff} cells differ out of {n_ref}");
@@ -1168,18 +1074,6 @@ mod tests {
             assert!(fast == slow, "axis {axis}");
             assert!(pass.all_columns_close(&fast));
         }
-    }
-
-    #[test]
-    fn weld_merges_equal_positions_only() {
-        let v = [
-            DVec3::new(0.0, 1.0, 2.0),
-            DVec3::new(-0.0, 1.0, 2.0),
-            DVec3::new(0.0, 1.0, 2.0 + 1e-15),
-            DVec3::new(0.0, 1.0, 2.0),
-            DVec3::new(2.0, 1.0, 0.0),
-        ];
-        assert_eq!(weld(&v), vec![0, 0, 2, 0, 4]);
     }
 
     #[test]

@@ -202,17 +202,6 @@ impl Grid {
         self.sample_of_cell[i as usize + nx * (j as usize + ny * k as usize)]
     }
 
-    /// Whether cell `(i, j, k)` of the offset lattice (centre `origin + h (i + 1/2, j + 1/2,
-    /// k + 1/2)`) is inside the solid; `false` beyond the grid's extent.
-    #[inline]
-    pub fn offset_inside_at(&self, i: i64, j: i64, k: i64) -> bool {
-        let [nx, ny, nz] = offset_dims(self.dims);
-        if i < 0 || j < 0 || k < 0 || i >= nx as i64 || j >= ny as i64 || k >= nz as i64 {
-            return false;
-        }
-        self.offset_inside[i as usize + nx * (j as usize + ny * k as usize)]
-    }
-
     /// Number of interior samples.
     pub fn len(&self) -> usize {
         self.points.len()

@@ -1,7 +1,13 @@
 //! The input: a triangle mesh, validated once so that later stages can trust it.
+mod weld;
+
+#[cfg(test)]
+pub(crate) use weld::edges_balance;
+pub use weld::weld;
+
 use glam::{DVec3, Vec3};
 
-use crate::Error;
+use crate::MeshError;
 
 /// Coordinates beyond this magnitude are rejected: products of three of them (volumes) must
 /// stay far from f64 overflow.
@@ -18,20 +24,24 @@ pub struct Mesh {
 impl Mesh {
     /// Build a mesh, checking that it has triangles, that every coordinate is finite and
     /// below [`MAX_COORDINATE`] in magnitude, and that every index is in range.
-    pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, Error> {
+    ///
+    /// # Errors
+    ///
+    /// The first of these checks that fails, as a [`MeshError`].
+    pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
         if triangles.is_empty() {
-            return Err(Error::NoTriangles);
+            return Err(MeshError::NoTriangles);
         }
         if let Some(index) = vertices
             .iter()
             .position(|v| !v.is_finite() || v.abs().max_element() > MAX_COORDINATE)
         {
-            return Err(Error::BadVertex { index });
+            return Err(MeshError::BadVertex { index });
         }
         let count = vertices.len();
         for (index, t) in triangles.iter().enumerate() {
             if let Some(&vertex) = t.iter().find(|&&v| v as usize >= count) {
-                return Err(Error::BadIndex {
+                return Err(MeshError::BadIndex {
                     index,
                     vertex,
                     count,
@@ -45,7 +55,11 @@ impl Mesh {
     }
 
     /// Like [`Mesh::new`] from single-precision positions, as most engines store them.
-    pub fn from_f32(vertices: &[Vec3], triangles: Vec<[u32; 3]>) -> Result<Self, Error> {
+    ///
+    /// # Errors
+    ///
+    /// As [`Mesh::new`].
+    pub fn from_f32(vertices: &[Vec3], triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
         Self::new(vertices.iter().map(|v| v.as_dvec3()).collect(), triangles)
     }
 
@@ -98,16 +112,6 @@ impl Mesh {
             })
             .sum()
     }
-
-    /// Total surface area.
-    pub fn area(&self) -> f64 {
-        (0..self.triangles.len())
-            .map(|t| {
-                let [a, b, c] = self.corners(t);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum()
-    }
 }
 
 #[cfg(test)]
@@ -116,16 +120,16 @@ mod tests {
 
     #[test]
     fn rejects_bad_input() {
-        assert_eq!(Mesh::new(vec![], vec![]), Err(Error::NoTriangles));
+        assert_eq!(Mesh::new(vec![], vec![]), Err(MeshError::NoTriangles));
         let v = vec![DVec3::ZERO, DVec3::X, DVec3::new(f64::NAN, 0.0, 0.0)];
         assert_eq!(
             Mesh::new(v, vec![[0, 1, 2]]),
-            Err(Error::BadVertex { index: 2 })
+            Err(MeshError::BadVertex { index: 2 })
         );
         let v = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
         assert!(matches!(
             Mesh::new(v, vec![[0, 1, 3]]),
-            Err(Error::BadIndex { vertex: 3, .. })
+            Err(MeshError::BadIndex { vertex: 3, .. })
         ));
     }
 }

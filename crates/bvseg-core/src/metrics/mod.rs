@@ -16,8 +16,14 @@
 //! - `TOV = #(outside cells of both lattices in the union) / (2 n)`
 //! - `OV_i = #(outside cells of both lattices in volume i) / (2 n_i)`, `MOV = max_i OV_i`
 //!
-//! A cell of the offset lattice is written as its coordinates with [`OFFSET_TAG`] added to
-//! the first, so that one list holds a volume's outside cells of both lattices.
+//! One list holds a volume's outside cells of both lattices, as [`Cell`]s; [`Coverage`] keeps
+//! the union's count as volumes change.
+mod cell;
+mod coverage;
+
+pub use cell::Cell;
+pub use coverage::Coverage;
+
 use glam::DVec3;
 
 use crate::sampling::{offset_dims, Grid, NONE};
@@ -71,15 +77,6 @@ fn interval(shape: Shape, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
 /// Number of lattices the outside volume is counted on.
 pub const LATTICES: f64 = 2.0;
 
-/// Added to the first coordinate of a cell of the offset lattice (far beyond any real one).
-pub const OFFSET_TAG: i64 = 1 << 40;
-
-/// Whether `c` is a (tagged) cell of the offset lattice.
-#[inline]
-pub fn is_offset_cell(c: &[i64; 3]) -> bool {
-    c[0] >= OFFSET_TAG / 2
-}
-
 /// Outside volume relative to a part of `n` samples, from its number of outside cells of
 /// both lattices.
 #[inline]
@@ -88,6 +85,7 @@ pub fn relative(cells: usize, n: f64) -> f64 {
 }
 
 /// Call `f(i, j, k)` for every cell of the sampling lattice whose centre lies in `v`.
+#[cfg(test)]
 pub fn for_each_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(i64, i64, i64)) {
     columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
         for k in k0..=k1 {
@@ -98,8 +96,8 @@ pub fn for_each_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(i64, i64
 }
 
 /// Call `f(cell)` for every cell of either lattice outside the solid whose centre lies in
-/// `v`; cells of the offset lattice are tagged with [`OFFSET_TAG`].
-pub fn for_each_outside_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut([i64; 3])) {
+/// `v`.
+pub fn for_each_outside_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(Cell)) {
     outside_cells_while(grid, v, |c| {
         f(c);
         true
@@ -111,7 +109,7 @@ pub fn for_each_outside_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(
 pub fn outside_cells_while(
     grid: &Grid,
     v: &BoundingVolume,
-    mut f: impl FnMut([i64; 3]) -> bool,
+    mut f: impl FnMut(Cell) -> bool,
 ) -> bool {
     let mut go = true;
     let dims = grid.dims;
@@ -122,7 +120,7 @@ pub fn outside_cells_while(
             [k0, k1],
             |s| *s != NONE,
             |k| {
-                go &= f([i, j, k]);
+                go &= f(Cell::sampling([i, j, k]));
             },
         );
         go
@@ -139,7 +137,7 @@ pub fn outside_cells_while(
             [k0, k1],
             |&b| b,
             |k| {
-                go &= f([i + OFFSET_TAG, j, k]);
+                go &= f(Cell::offset([i, j, k]));
             },
         );
         go
@@ -214,7 +212,7 @@ fn columns_in(
 
 /// Cells of both lattices outside the solid whose centres `v` contains (see
 /// [`for_each_outside_cell`]).
-pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<[i64; 3]> {
+pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<Cell> {
     let mut out = Vec::new();
     for_each_outside_cell(grid, v, |c| out.push(c));
     out
@@ -222,7 +220,7 @@ pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<[i64; 3]> {
 
 /// TOV, OV and MOV of `volumes`, where volume `i` bounds a part of `counts[i]` samples.
 pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) -> Outside {
-    let per: Vec<Vec<[i64; 3]>> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
+    let per: Vec<Vec<Cell>> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
     outside_from_cells(
         &per.iter().map(|c| c.as_slice()).collect::<Vec<_>>(),
         counts,
@@ -230,7 +228,7 @@ pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) 
 }
 
 /// TOV, OV and MOV from each volume's outside cells (see [`outside_cells`]).
-pub fn outside_from_cells(per: &[&[[i64; 3]]], counts: &[f64]) -> Outside {
+pub fn outside_from_cells(per: &[&[Cell]], counts: &[f64]) -> Outside {
     let total: f64 = counts.iter().sum();
     let ov: Vec<f64> = per
         .iter()
@@ -248,12 +246,13 @@ pub fn outside_from_cells(per: &[&[[i64; 3]]], counts: &[f64]) -> Outside {
 
 /// Number of distinct cells of one lattice (the offset one if `offset`) in `per`, marked in a
 /// bitmap over their bounding box.
-fn distinct(per: &[&[[i64; 3]]], offset: bool) -> usize {
+fn distinct(per: &[&[Cell]], offset: bool) -> usize {
     let cells = || {
         per.iter()
             .copied()
             .flatten()
-            .filter(move |c| is_offset_cell(c) == offset)
+            .filter(move |c| c.is_offset() == offset)
+            .map(Cell::index)
     };
     let mut lo = [i64::MAX; 3];
     let mut hi = [i64::MIN; 3];
@@ -326,9 +325,9 @@ mod tests {
         // So does the offset lattice's: its outside cells are those of its centres that are
         // in the ball but not in the cube.
         let half = DVec3::splat(0.5 * h);
-        let offset_cells: Vec<[i64; 3]> = outside_cells(&g, &v)
+        let offset_cells: Vec<Cell> = outside_cells(&g, &v)
             .into_iter()
-            .filter(is_offset_cell)
+            .filter(Cell::is_offset)
             .collect();
         let brute = (c[2] - r..=c[2] + r)
             .flat_map(|k| {

@@ -1,0 +1,61 @@
+//! A cell of one of the two lattices the outside volume is counted on.
+//!
+//! The sampling lattice and the one offset from it by half a cell share one list per volume,
+//! so a cell carries its lattice in its coordinates: an offset cell has [`OFFSET_TAG`] added
+//! to its first one (far beyond any real index). The encoding stays in this file.
+
+/// Added to the first coordinate of a cell of the offset lattice.
+const OFFSET_TAG: i64 = 1 << 40;
+
+/// A cell of the sampling lattice or of the offset lattice (see [`crate::metrics`]). Ordered
+/// and hashed by its encoded coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Cell([i64; 3]);
+
+impl Cell {
+    /// Cell `c` of the sampling lattice.
+    #[inline]
+    pub fn sampling(c: [i64; 3]) -> Self {
+        Cell(c)
+    }
+
+    /// Cell `c` of the offset lattice (centres at `origin + h (c + 1/2)`).
+    #[inline]
+    pub fn offset([i, j, k]: [i64; 3]) -> Self {
+        Cell([i + OFFSET_TAG, j, k])
+    }
+
+    /// Whether the cell belongs to the offset lattice.
+    #[inline]
+    pub fn is_offset(&self) -> bool {
+        self.0[0] >= OFFSET_TAG / 2
+    }
+
+    /// The cell's indices in its own lattice.
+    #[inline]
+    pub fn index(&self) -> [i64; 3] {
+        let [i, j, k] = self.0;
+        if self.is_offset() {
+            [i - OFFSET_TAG, j, k]
+        } else {
+            [i, j, k]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lattices_stay_apart_and_indices_round_trip() {
+        for c in [[0, 0, 0], [-5, 7, 1 << 20], [(1 << 39) - 1, -3, 2]] {
+            let (s, o) = (Cell::sampling(c), Cell::offset(c));
+            assert!(!s.is_offset() && o.is_offset());
+            assert_eq!((s.index(), o.index()), (c, c));
+            assert_ne!(s, o);
+        }
+        // Negative offset indices (cells beyond the lattice's low corner) stay offset.
+        assert!(Cell::offset([-1000, 0, 0]).is_offset());
+    }
+}

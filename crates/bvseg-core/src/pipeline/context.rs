@@ -1,0 +1,45 @@
+//! What every stage of a run reads, in one place.
+use std::sync::Arc;
+
+use crate::fitting::{Fit, Fitter};
+use crate::partition::{Partition, Solid};
+use crate::refine::budget::work_budget;
+use crate::{Cancel, Mesh, Params};
+
+/// The mesh, its sampled solid (with its connected pieces), the parameters and the run's
+/// cancel flag, read by every stage; and the one thing the stages share mutably, the fitter
+/// with its cache of fits and its account of the run's work.
+pub(crate) struct Context {
+    pub mesh: Mesh,
+    pub solid: Solid,
+    pub params: Params,
+    pub fitter: Fitter,
+    pub cancel: Cancel,
+}
+
+impl Context {
+    /// A run's context: the fitter gets the run's bound on optional work (see
+    /// [`crate::refine::budget`]).
+    pub fn new(mesh: &Mesh, solid: Solid, params: &Params, cancel: Cancel) -> Self {
+        let budget = work_budget(&solid);
+        let fitter = Fitter::with_budget(mesh, &solid, params.bounding, budget, cancel.clone());
+        Self {
+            mesh: mesh.clone(),
+            solid,
+            params: params.clone(),
+            fitter,
+            cancel,
+        }
+    }
+
+    /// Every part's fit, from the cache where it has one.
+    pub fn fit_all(&mut self, part: &Partition) -> Vec<Arc<Fit>> {
+        self.fitter
+            .fit_all(&self.mesh, &self.solid, &part.labels, &part.parts)
+    }
+
+    /// Whether the run's optional work should stop: its bound is spent, or it was cancelled.
+    pub fn out_of_work(&self) -> bool {
+        self.fitter.exhausted()
+    }
+}

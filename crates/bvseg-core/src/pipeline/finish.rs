@@ -1,0 +1,117 @@
+//! The final step: polish the partition (tighten, relieve the worst part, reshape), grow by
+//! the margin, and assemble the result with its hierarchy.
+use glam::DVec3;
+
+use super::{Context, State};
+use crate::metrics::{outside_from_cells, outside_volumes, Cell};
+use crate::refine::budget::work_budget;
+use crate::reshaping::reshape;
+use crate::tightening::{relieve_worst, tighten, Passes};
+use crate::{hierarchy, BoundingVolume, Metrics, Part, Segmentation, Step};
+
+/// Passes of the final tightening, of which 3 judge every move (the others only those that
+/// gained).
+pub const TIGHTEN_PASSES: Passes = Passes { total: 40, full: 3 };
+
+/// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
+pub const RELIEVE_STEPS: usize = 40;
+
+/// `cur` polished, when [`crate::Params::polish`] asks for it and the work bound allows, and
+/// grown by the margin; the flag says whether the work bound cut the polish short.
+pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
+    let mut cut = false;
+    let mut out_of_work = |ctx: &Context| {
+        let out = ctx.out_of_work();
+        cut |= out && !ctx.cancel.is_cancelled();
+        out
+    };
+    // The polish is optional work: skipped once the work bound is spent.
+    let polish = ctx.params.polish && !out_of_work(ctx);
+    let cur = if polish {
+        let mut part = cur.part;
+        tighten(ctx, &mut part, TIGHTEN_PASSES);
+        if ctx.params.k.is_none() {
+            relieve_worst(ctx, &mut part, RELIEVE_STEPS);
+        }
+        State::evaluate(ctx, part)
+    } else {
+        cur
+    };
+    let cur = if polish && !out_of_work(ctx) {
+        reshaped(ctx, cur)
+    } else {
+        cur
+    };
+    (with_margin(ctx, cur), cut)
+}
+
+/// `cur` with its ellipsoids reshaped to stick out less (see [`crate::reshaping`]), and
+/// measured again.
+fn reshaped(ctx: &Context, cur: State) -> State {
+    let points: Vec<&[DVec3]> = cur.fits.iter().map(|f| f.hull.as_slice()).collect();
+    let min_r = 0.5 * ctx.solid.grid.h;
+    let counts = cur.part.counts();
+    let cells = cur.fits.iter().map(|f| f.outside.clone()).collect();
+    let (volumes, cells) = reshape(
+        &ctx.solid,
+        &points,
+        &cur.volumes,
+        cells,
+        &counts,
+        min_r,
+        work_budget(&ctx.solid),
+    );
+    let cells: Vec<&[Cell]> = cells.iter().map(Vec::as_slice).collect();
+    let o = outside_from_cells(&cells, &counts);
+    cur.with_volumes(volumes, o)
+}
+
+/// `cur` with every volume grown by the margin ([`crate::Params::margin`]), measured again.
+fn with_margin(ctx: &Context, cur: State) -> State {
+    let margin = ctx.params.margin;
+    if margin <= 0.0 {
+        return cur;
+    }
+    let volumes: Vec<BoundingVolume> = cur.volumes.iter().map(|v| v.grown(margin)).collect();
+    let o = outside_volumes(&ctx.solid.grid, &volumes, &cur.part.counts());
+    cur.with_volumes(volumes, o)
+}
+
+/// The result for the final state `cur` after `history`: parts, figures, the hierarchy, and
+/// each triangle's and sample's part.
+pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation {
+    let k = cur.part.k();
+    let n = ctx.solid.len() as f64;
+    let parts: Vec<Part> = (0..k)
+        .map(|i| Part {
+            volume: cur.volumes[i],
+            fraction: cur.part.parts[i].n / n,
+            samples: cur.part.parts[i].n as usize,
+            ov: cur.ov[i],
+            e: cur.part.e(i),
+        })
+        .collect();
+    let adjacency = cur.part.adjacency(&ctx.solid.grid);
+    let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
+    let margin = ctx.params.margin;
+    let hierarchy = hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
+        ctx.fitter.fit_points(&ctx.solid, p).grown(margin)
+    });
+    Segmentation {
+        kind: ctx.params.bounding,
+        parts,
+        metrics: Metrics {
+            k,
+            f: cur.f,
+            tov: cur.tov,
+            mov: cur.mov,
+            samples: ctx.solid.len(),
+        },
+        history,
+        hierarchy,
+        triangle_parts: ctx.fitter.enclosure().triangle_parts(&cur.part.labels),
+        sample_parts: cur.part.labels.clone(),
+        cell_size: ctx.solid.grid.h,
+        budget_exhausted: false,
+    }
+}

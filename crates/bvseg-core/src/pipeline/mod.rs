@@ -1,0 +1,443 @@
+//! The algorithm of the paper's section 5, as a steppable loop.
+//!
+//! 1. **Sample** the solid's interior ([`crate::sampling`]); done by [`Segmenter::new`].
+//! 2. **Start**: a CVT with one part per connected piece of the solid (or `k` parts with a
+//!    fixed k), **optimised** by the e-weighted Lloyd loop and the boundary polish
+//!    ([`crate::optimization`]).
+//! 3. **Refine** (tolerance mode): **judge** the output volumes; while TOV >= sigma_G or
+//!    MOV >= sigma_L and k < max_k, **split** a part and re-optimise it with its neighbours
+//!    ([`crate::refine::split`]), or **merge** the worst part away when only MOV is out of
+//!    tolerance ([`crate::refine::merge`]); **tighten** when splits stall near the tolerance
+//!    ([`crate::refine::checkpoint`]); stop when more parts stop helping
+//!    ([`crate::refine::patience`]).
+//! 4. **Merge** the pair whose merge lowers TOV most, while one does and the tolerances stay
+//!    met.
+//! 5. **Final**: **tighten** ([`crate::tightening`]), **reshape** ([`crate::reshaping`]),
+//!    **measure**, and build the **hierarchy** ([`crate::hierarchy`]): see [`finish`].
+//!
+//! Every step is judged with the output volumes themselves ([`crate::fitting`]), cached by
+//! the part's exact moments, so only the parts a step changed are refitted.
+mod context;
+mod finish;
+mod state;
+
+pub(crate) use context::Context;
+pub(crate) use state::State;
+
+use crate::initialization::cvt;
+use crate::optimization::optimize;
+use crate::parallel::{join, threads};
+use crate::partition::{Partition, Solid};
+use crate::refine::checkpoint::{Checkpoints, CHECKPOINT_PASSES};
+use crate::refine::patience::MovPatience;
+use crate::refine::{merge, split, Tolerances};
+use crate::sampling::Grid;
+use crate::tightening::tighten;
+use crate::{BoundingVolume, Cancel, Error, Mesh, Params, Segmentation, Step, StepKind};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Start,
+    Refine,
+    Merge,
+    Final,
+    Done,
+}
+
+/// The segmentation as a sequence of steps, for progress display and interactive use: call
+/// [`Segmenter::step`] until it returns `None`, then [`Segmenter::finish`]. Each step is a
+/// bounded amount of work (one split or merge with its re-optimisation), so a UI can run one
+/// per frame.
+///
+/// ```
+/// # use bvseg_core::{Mesh, Params, Segmenter};
+/// # use glam::{DMat3, DVec3};
+/// # let mesh = bvseg_core::shapes::ellipsoid(DVec3::ZERO, DVec3::new(2.0, 1.0, 1.0), DMat3::IDENTITY, 16);
+/// let params = Params { samples: 2000, ..Params::default() };
+/// let mut run = Segmenter::new(&mesh, &params)?;
+/// while let Some(step) = run.step() {
+///     println!("{:?}: k = {}, TOV = {:.3}", step.kind, step.k, step.tov);
+/// }
+/// let seg = run.finish()?;
+/// assert!(seg.parts.len() >= 1);
+/// # Ok::<(), bvseg_core::Error>(())
+/// ```
+pub struct Segmenter {
+    ctx: Context,
+    tol: Tolerances,
+    phase: Phase,
+    state: Option<State>,
+    /// Parts left to try in the current split step (the next last), and the first try's
+    /// result.
+    tries: Vec<usize>,
+    first_try: Option<State>,
+    /// The next try's partition, when it was prepared alongside the current one.
+    pending: Option<(usize, Partition)>,
+    refine_steps: usize,
+    checkpoints: Checkpoints,
+    patience: MovPatience,
+    history: Vec<Step>,
+    result: Option<Segmentation>,
+    /// Whether the work bound cut the run short (see [`crate::refine::budget`]).
+    budget_hit: bool,
+}
+
+impl Segmenter {
+    /// Validate the input and sample the solid. The remaining work happens in
+    /// [`Segmenter::step`].
+    ///
+    /// # Errors
+    ///
+    /// [`Error::InvalidParams`] when `params` fails [`Params::validate`], and the sampling's
+    /// errors: [`Error::NoVolume`], [`Error::TooComplex`].
+    pub fn new(mesh: &Mesh, params: &Params) -> Result<Self, Error> {
+        Self::with_cancel(mesh, params, Cancel::new())
+    }
+
+    /// Like [`Segmenter::new`], stopping when `cancel` is set: [`Segmenter::step`] then
+    /// returns `None` and [`Segmenter::finish`] [`Error::Cancelled`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Segmenter::new`], and [`Error::Cancelled`] if `cancel` was set during sampling.
+    pub fn with_cancel(mesh: &Mesh, params: &Params, cancel: Cancel) -> Result<Self, Error> {
+        params.validate()?;
+        cancel.check()?;
+        let grid = Grid::from_mesh(mesh, params.samples)?;
+        cancel.check()?;
+        if grid.len() < 8 {
+            return Err(Error::NoVolume(format!(
+                "only {} grid cells lie inside the mesh",
+                grid.len()
+            )));
+        }
+        let solid = Solid::new(grid);
+        Ok(Self {
+            ctx: Context::new(mesh, solid, params, cancel),
+            tol: Tolerances::of(params),
+            phase: Phase::Start,
+            state: None,
+            tries: Vec::new(),
+            first_try: None,
+            pending: None,
+            refine_steps: 0,
+            checkpoints: Checkpoints::default(),
+            patience: MovPatience::default(),
+            history: Vec::new(),
+            result: None,
+            budget_hit: false,
+        })
+    }
+
+    /// Number of interior samples the solid was sampled with.
+    #[must_use]
+    pub fn samples(&self) -> usize {
+        self.ctx.solid.len()
+    }
+
+    /// The refinement history so far.
+    #[must_use]
+    pub fn history(&self) -> &[Step] {
+        &self.history
+    }
+
+    /// The current part of each sample (empty before the first step).
+    #[must_use]
+    pub fn labels(&self) -> &[u32] {
+        self.state.as_ref().map_or(&[], |s| &s.part.labels)
+    }
+
+    /// The current part of each input triangle (empty before the first step), by the rule
+    /// [`Segmentation::triangle_parts`] follows.
+    #[must_use]
+    pub fn triangle_parts(&self) -> Vec<u32> {
+        self.state.as_ref().map_or_else(Vec::new, |s| {
+            self.ctx.fitter.enclosure().triangle_parts(&s.part.labels)
+        })
+    }
+
+    /// The current refinement-time bounding volumes (empty before the first step).
+    #[must_use]
+    pub fn volumes(&self) -> &[BoundingVolume] {
+        self.state.as_ref().map_or(&[], |s| &s.volumes)
+    }
+
+    /// Whether [`Segmenter::step`] has returned `None`.
+    #[must_use]
+    pub fn is_done(&self) -> bool {
+        self.phase == Phase::Done
+    }
+
+    /// Do the next step and report it; `None` when the segmentation is complete.
+    pub fn step(&mut self) -> Option<Step> {
+        if self.ctx.cancel.is_cancelled() {
+            self.phase = Phase::Done;
+            return None;
+        }
+        loop {
+            let step = match self.phase {
+                Phase::Start => Some(self.start()),
+                Phase::Refine => self.refine(),
+                Phase::Merge => self.merge(),
+                Phase::Final => Some(self.finalize()),
+                Phase::Done => return None,
+            };
+            // A phase that ends without a step has moved the run on to the next.
+            if step.is_some() {
+                return step;
+            }
+        }
+    }
+
+    /// Run any remaining steps and return the result.
+    ///
+    /// # Errors
+    ///
+    /// [`Error::Cancelled`] when the run's [`Cancel`] flag was set before it ended, and
+    /// [`Error::Internal`] if the run broke one of its own invariants.
+    pub fn finish(mut self) -> Result<Segmentation, Error> {
+        while self.step().is_some() {}
+        if self.ctx.cancel.is_cancelled() {
+            return Err(Error::Cancelled);
+        }
+        let mut r = self
+            .result
+            .take()
+            .ok_or_else(|| Error::Internal("the run ended without a result".into()))?;
+        r.budget_exhausted = self.budget_hit;
+        r.check()?;
+        Ok(r)
+    }
+
+    /// Initial partition: one part per piece of the solid (or k), optimised.
+    fn start(&mut self) -> Step {
+        let p = &self.ctx.params;
+        let k = p.k.unwrap_or(self.ctx.solid.pieces.min(p.max_k));
+        let mut part = cvt(&self.ctx.solid, k.min(self.ctx.solid.len()), p.seed);
+        optimize(&self.ctx.solid, &mut part, None, None, p.max_sweeps);
+        let s = State::evaluate(&mut self.ctx, part);
+        self.phase = if self.ctx.params.k.is_some() {
+            Phase::Final
+        } else {
+            Phase::Refine
+        };
+        self.accept(StepKind::Initial, s)
+    }
+
+    /// One refinement step: judge, then split (or merge the worst part, or tighten); `None`
+    /// when refinement is over (the phase has moved on).
+    fn refine(&mut self) -> Option<Step> {
+        if self.out_of_work() {
+            return None;
+        }
+        let cur = self.state.as_ref()?;
+        let k = cur.part.k();
+        if self.tol.met(cur.figures())
+            || k >= self.ctx.params.max_k
+            || k >= self.ctx.solid.len() / 2
+        {
+            return self.end_refinement();
+        }
+        if self.tries.is_empty() && self.first_try.is_none() {
+            self.refine_steps += 1;
+            if self.refine_steps > 4 * self.ctx.params.max_k {
+                // A guard against splits and merges undoing each other forever.
+                self.phase = Phase::Final;
+                return None;
+            }
+            if self
+                .checkpoints
+                .due(&self.history, k, cur.tov, &self.ctx.params)
+            {
+                let part = cur.part.clone();
+                return Some(self.checkpoint(part));
+            }
+            if !self.tol.tov_bad(cur.figures()) {
+                // Only MOV is out of tolerance.
+                if self.patience.run_out(cur.mov) {
+                    return self.end_refinement();
+                }
+                if let Some(step) = self.merge_worst() {
+                    return Some(step);
+                }
+            }
+            let cur = self.state.as_ref()?;
+            let tov_bad = self.tol.tov_bad(cur.figures());
+            self.tries = split::candidates(&cur.ov, &cur.part.counts(), tov_bad);
+            self.tries.reverse();
+        }
+        self.split_next()
+    }
+
+    /// Try the next candidate split of the current step; keep it if it helps. When every try
+    /// failed, keep the first while TOV is out of tolerance, or end refinement.
+    fn split_next(&mut self) -> Option<Step> {
+        while let Some(i) = self.tries.pop() {
+            let cur = self.state.as_ref()?;
+            let part = match self.pending.take() {
+                Some((j, p)) if j == i => Some(p),
+                _ => {
+                    // With a second thread, the next try is re-optimised alongside this one:
+                    // the optimisation is serial, and the first try is often undone.
+                    let next = self.tries.last().copied().filter(|_| threads() > 1);
+                    let (solid, sweeps) = (&self.ctx.solid, self.ctx.params.max_sweeps);
+                    let (this, ahead) = join(
+                        || split::try_split(solid, &cur.part, i, sweeps),
+                        || {
+                            next.and_then(|j| {
+                                split::try_split(solid, &cur.part, j, sweeps).map(|p| (j, p))
+                            })
+                        },
+                    );
+                    self.pending = ahead;
+                    this
+                }
+            };
+            let Some(part) = part else {
+                continue;
+            };
+            let cand = State::evaluate(&mut self.ctx, part);
+            let cur = self.state.as_ref()?;
+            if split::keeps(cur.figures(), cand.figures(), self.tol) {
+                self.tries.clear();
+                self.first_try = None;
+                return Some(self.accept(StepKind::Split, cand));
+            }
+            let step = self.record(cand.step(StepKind::Backtrack));
+            if self.first_try.is_none() {
+                self.first_try = Some(cand);
+            }
+            if !self.tries.is_empty() {
+                return Some(step);
+            }
+        }
+        let tov_bad = self
+            .state
+            .as_ref()
+            .is_some_and(|s| self.tol.tov_bad(s.figures()));
+        match self.first_try.take() {
+            Some(_) if !tov_bad => self.end_refinement(),
+            Some(s) => Some(self.accept(StepKind::Split, s)),
+            None => {
+                // No part could be split at all.
+                self.phase = Phase::Final;
+                None
+            }
+        }
+    }
+
+    /// Tighten the current partition during refinement (see [`crate::refine::checkpoint`]).
+    fn checkpoint(&mut self, mut part: Partition) -> Step {
+        self.checkpoints.mark(part.k());
+        tighten(&mut self.ctx, &mut part, CHECKPOINT_PASSES);
+        let s = State::evaluate(&mut self.ctx, part);
+        self.accept(StepKind::Tighten, s)
+    }
+
+    /// When only MOV is out of tolerance: merge the worst part into the neighbour that
+    /// lowers MOV most, keeping TOV in tolerance, if one does.
+    fn merge_worst(&mut self) -> Option<Step> {
+        let cur = self.state.as_ref()?;
+        let worst = merge::worst(&cur.ov)? as u32;
+        let cur_mov = cur.mov;
+        let pairs: Vec<(u32, u32)> = merge::pairs(&self.ctx, cur)
+            .into_iter()
+            .filter(|&(a, b)| a == worst || b == worst)
+            .collect();
+        let (a, b) = merge::relieving(&self.options(&pairs), cur_mov, self.tol)?;
+        let s = self.merged(a, b)?;
+        Some(self.accept(StepKind::Merge, s))
+    }
+
+    /// One merge of the merge phase; `None` when no merge helps (the phase has moved on).
+    fn merge(&mut self) -> Option<Step> {
+        if self.out_of_work() {
+            return None;
+        }
+        match self.best_merge() {
+            Some(s) => Some(self.accept(StepKind::Merge, s)),
+            None => {
+                self.phase = Phase::Final;
+                None
+            }
+        }
+    }
+
+    /// The merge that lowers TOV most (keeping the tolerances if they are met), measured.
+    fn best_merge(&mut self) -> Option<State> {
+        let cur = self.state.as_ref()?;
+        let (pairs, figures) = (merge::pairs(&self.ctx, cur), cur.figures());
+        let (a, b) = merge::best(&self.options(&pairs), figures, self.tol)?;
+        self.merged(a, b)
+    }
+
+    /// The figures after each merge of `pairs` (see [`merge::options`]).
+    fn options(&mut self, pairs: &[(u32, u32)]) -> Vec<merge::MergeOption> {
+        let Some(cur) = self.state.as_ref() else {
+            return Vec::new();
+        };
+        let (options, cut) = merge::options(&mut self.ctx, cur, pairs);
+        self.budget_hit |= cut && !self.ctx.cancel.is_cancelled();
+        options
+    }
+
+    /// The current partition with parts `a` and `b` merged, measured.
+    fn merged(&mut self, a: usize, b: usize) -> Option<State> {
+        let part = self.state.as_ref()?.part.merged(a, b);
+        Some(State::evaluate(&mut self.ctx, part))
+    }
+
+    /// The final step (see [`finish`]).
+    fn finalize(&mut self) -> Step {
+        self.phase = Phase::Done;
+        let Some(cur) = self.state.take() else {
+            return Step {
+                kind: StepKind::Final,
+                k: 0,
+                f: f64::NAN,
+                tov: f64::NAN,
+                mov: f64::NAN,
+            };
+        };
+        let (cur, budget_cut) = finish::polish(&mut self.ctx, cur);
+        self.budget_hit |= budget_cut;
+        let step = self.record(cur.step(StepKind::Final));
+        self.result = Some(finish::assemble(&self.ctx, &cur, self.history.clone()));
+        self.state = Some(cur);
+        step
+    }
+
+    /// Leave the refinement for the merge phase (or straight for the final step).
+    fn end_refinement(&mut self) -> Option<Step> {
+        self.phase = if self.ctx.params.merge {
+            Phase::Merge
+        } else {
+            Phase::Final
+        };
+        None
+    }
+
+    /// Whether the work bound is spent; if so, the run moves on to its final step.
+    fn out_of_work(&mut self) -> bool {
+        if self.ctx.out_of_work() {
+            self.budget_hit |= !self.ctx.cancel.is_cancelled();
+            self.phase = Phase::Final;
+            return true;
+        }
+        false
+    }
+
+    fn record(&mut self, step: Step) -> Step {
+        self.history.push(step);
+        step
+    }
+
+    /// Make `s` the current state, recording the step that led to it.
+    fn accept(&mut self, kind: StepKind, s: State) -> Step {
+        // A try prepared ahead was split from the state being replaced.
+        self.pending = None;
+        let step = self.record(s.step(kind));
+        self.state = Some(s);
+        step
+    }
+}

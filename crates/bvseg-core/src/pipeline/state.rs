@@ -1,0 +1,77 @@
+//! A partition with the output volumes of its parts and its figures: what each step of the
+//! run produces and the next one judges.
+use std::sync::Arc;
+
+use super::Context;
+use crate::fitting::Fit;
+use crate::metrics::{outside_from_cells, Cell, Outside};
+use crate::partition::Partition;
+use crate::refine::Figures;
+use crate::{BoundingVolume, Step, StepKind};
+
+/// A partition with its volumes and figures.
+#[derive(Debug, Clone)]
+pub(crate) struct State {
+    pub part: Partition,
+    pub fits: Vec<Arc<Fit>>,
+    pub volumes: Vec<BoundingVolume>,
+    pub f: f64,
+    pub tov: f64,
+    pub mov: f64,
+    pub ov: Vec<f64>,
+}
+
+impl State {
+    /// Fit (or fetch from the cache) every part's output volume, and measure.
+    pub fn evaluate(ctx: &mut Context, part: Partition) -> Self {
+        let fits = ctx.fit_all(&part);
+        Self::measure(part, fits)
+    }
+
+    /// `part` with the volumes `fits`, measured.
+    pub fn measure(part: Partition, fits: Vec<Arc<Fit>>) -> Self {
+        let counts = part.counts();
+        let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume).collect();
+        let cells: Vec<&[Cell]> = fits.iter().map(|f| f.outside.as_slice()).collect();
+        let o = outside_from_cells(&cells, &counts);
+        State {
+            f: part.f(),
+            part,
+            fits,
+            volumes,
+            tov: o.tov,
+            mov: o.mov,
+            ov: o.ov,
+        }
+    }
+
+    /// The same partition with other volumes, measured as `o`.
+    pub fn with_volumes(self, volumes: Vec<BoundingVolume>, o: Outside) -> Self {
+        State {
+            volumes,
+            tov: o.tov,
+            mov: o.mov,
+            ov: o.ov,
+            ..self
+        }
+    }
+
+    /// The figures the tolerances judge.
+    pub fn figures(&self) -> Figures {
+        Figures {
+            tov: self.tov,
+            mov: self.mov,
+        }
+    }
+
+    /// The step of kind `kind` that led here.
+    pub fn step(&self, kind: StepKind) -> Step {
+        Step {
+            kind,
+            k: self.part.k(),
+            f: self.f,
+            tov: self.tov,
+            mov: self.mov,
+        }
+    }
+}

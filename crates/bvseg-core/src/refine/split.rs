@@ -1,0 +1,134 @@
+//! Which part to split, and whether the split stays (paper section 5.2).
+//!
+//! While TOV is out of tolerance, the part that adds the most outside volume is split (the
+//! paper's largest OV favours small parts, whose split barely moves TOV); once only MOV is,
+//! the part with the largest OV, as in the paper. A split that does not improve the figure out
+//! of tolerance is undone and the next part tried, up to [`SPLIT_TRIES`]; if every try fails
+//! the first is kept while TOV is out of tolerance (so that refinement always progresses), and
+//! refinement ends when only MOV was (no split helps it without breaking TOV).
+use super::{Figures, Tolerances};
+use crate::initialization::split;
+use crate::optimization::optimize;
+use crate::partition::{Partition, Solid};
+
+/// How many parts a refinement step tries to split before keeping the first split anyway.
+/// More tries rarely found a better split on the shared meshes, and each costs a local
+/// re-optimisation.
+pub const SPLIT_TRIES: usize = 2;
+
+/// Lloyd sweeps of the two halves after a split, at most. A boundary between halves often
+/// drifts by one layer per sweep for a hundred sweeps, each gaining little; the boundary
+/// polish that follows makes those moves at a fraction of the cost.
+pub const LOCAL_SWEEPS: usize = 10;
+
+/// The parts to try splitting, best first (at most [`SPLIT_TRIES`]): by outside volume
+/// (`ov[i]` times the part's samples `sizes[i]`) while TOV is out of tolerance, by OV once only
+/// MOV is; ties go to the lower index.
+pub fn candidates(ov: &[f64], sizes: &[f64], tov_bad: bool) -> Vec<usize> {
+    let weight = |i: usize| if tov_bad { ov[i] * sizes[i] } else { ov[i] };
+    let mut order: Vec<usize> = (0..ov.len()).collect();
+    order.sort_by(|&a, &b| weight(b).total_cmp(&weight(a)).then(a.cmp(&b)));
+    order.truncate(SPLIT_TRIES);
+    order
+}
+
+/// Whether a split that gave `cand` from `cur` stays: it must improve the figure that is out
+/// of tolerance and, when that is MOV, keep TOV in tolerance.
+pub fn keeps(cur: Figures, cand: Figures, tol: Tolerances) -> bool {
+    if tol.tov_bad(cur) {
+        cand.tov < cur.tov
+    } else {
+        cand.mov < cur.mov && cand.tov < tol.tov
+    }
+}
+
+/// Part `i` of `part` split in two, and the halves re-optimised: Lloyd sweeps on the two
+/// halves (at most `max_sweeps`, and [`LOCAL_SWEEPS`]), boundary moves with their neighbours
+/// too. `None` if `i` cannot be split.
+pub fn try_split(
+    solid: &Solid,
+    part: &Partition,
+    i: usize,
+    max_sweeps: usize,
+) -> Option<Partition> {
+    let k = part.k();
+    let mut new = split(solid, part, i)?;
+    let mut active: Vec<u32> = part
+        .adjacency(&solid.grid)
+        .iter()
+        .filter_map(|&(a, b)| {
+            if a as usize == i {
+                Some(b)
+            } else if b as usize == i {
+                Some(a)
+            } else {
+                None
+            }
+        })
+        .collect();
+    active.push(i as u32);
+    active.push(k as u32);
+    active.sort_unstable();
+    optimize(
+        solid,
+        &mut new,
+        Some(&[i as u32, k as u32]),
+        Some(&active),
+        max_sweeps.min(LOCAL_SWEEPS),
+    );
+    Some(new)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::initialization::cvt;
+    use crate::sampling::Grid;
+    use glam::DVec3;
+
+    #[test]
+    fn candidates_by_outside_volume_then_by_ov() {
+        // Part 0: small with a large OV; part 2: large with a moderate one.
+        let ov = [2.0, 0.1, 0.5, 0.5];
+        let sizes = [10.0, 100.0, 100.0, 100.0];
+        assert_eq!(candidates(&ov, &sizes, true), vec![2, 3]);
+        assert_eq!(candidates(&ov, &sizes, false), vec![0, 2]);
+        assert_eq!(candidates(&[1.0], &[5.0], true), vec![0]);
+    }
+
+    #[test]
+    fn keeps_what_improves_the_figure_out_of_tolerance() {
+        let tol = Tolerances { tov: 0.3, mov: 0.5 };
+        let f = |tov, mov| Figures { tov, mov };
+        // TOV out of tolerance: only TOV counts.
+        assert!(keeps(f(0.4, 0.9), f(0.39, 2.0), tol));
+        assert!(!keeps(f(0.4, 0.9), f(0.4, 0.1), tol));
+        // Only MOV out: MOV must drop and TOV stay in tolerance.
+        assert!(keeps(f(0.2, 0.9), f(0.25, 0.8), tol));
+        assert!(!keeps(f(0.2, 0.9), f(0.31, 0.6), tol));
+        assert!(!keeps(f(0.2, 0.9), f(0.1, 0.9), tol));
+    }
+
+    #[test]
+    fn a_split_adds_one_part_and_keeps_the_others_in_place() {
+        // Two cubes joined by a bar: split the single part.
+        let g = Grid::from_inside_fn(DVec3::ZERO, DVec3::new(12.0, 4.0, 4.0), 1.0, |p| {
+            p.x < 4.0 || p.x > 8.0 || (p.y - 2.0).abs() < 1.0 && (p.z - 2.0).abs() < 1.0
+        });
+        let solid = Solid::new(g);
+        let part = cvt(&solid, 1, 0);
+        let new = try_split(&solid, &part, 0, 100).expect("a solid of many samples splits");
+        assert_eq!(new.k(), 2);
+        assert!(new.parts.iter().all(|m| m.n >= 1.0));
+        assert_eq!(new.counts().iter().sum::<f64>(), solid.len() as f64);
+        assert!(crate::flooding::is_connected(
+            &solid.grid,
+            &new.labels,
+            &solid.components
+        ));
+        assert!(
+            new.f() < part.f(),
+            "two parts fit a dumbbell better than one"
+        );
+    }
+}
