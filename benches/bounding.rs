@@ -1,5 +1,8 @@
 //! Bounding-volume stage: convex hull, minimum-volume enclosing ellipsoid and tight oriented
 //! box of 10,000-point parts (the MVEE and OBB times include their hull).
+// Tests and benchmarks state their expectations by panicking.
+// criterion_group! defines undocumented public functions.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use bvseg::internals::Rng;
 use bvseg::internals::{convex_hull, min_obb, mvee};
 use criterion::{black_box, criterion_group, criterion_main, Criterion};

@@ -8,6 +8,9 @@
 //! second, and the per-fit time is the iteration time divided by the part count printed
 //! before it. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
 //! count): `hull_points`, then `Fitter::fit_points` on the hull.
+// Tests and benchmarks state their expectations by panicking.
+// criterion_group! defines undocumented public functions.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use std::path::{Path, PathBuf};
 
 use bvseg::internals::hull_points;

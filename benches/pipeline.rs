@@ -21,6 +21,9 @@
 //!
 //! All set-up (loading, sampling, CVT initialisation) happens outside the timed closures, and
 //! lazily, so that a filtered run only prepares what it measures.
+// Tests and benchmarks state their expectations by panicking.
+// criterion_group! defines undocumented public functions.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use std::cell::{Cell, OnceCell};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};

@@ -1,4 +1,7 @@
 //! Sampling stage: `Grid::from_mesh` (and the inside test alone) on a ~50k-triangle sphere.
+// Tests and benchmarks state their expectations by panicking.
+// criterion_group! defines undocumented public functions.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use std::collections::HashMap;
 
 use bvseg::internals::{inside_cells, Grid};

@@ -3,6 +3,8 @@
 //! them (`scripts/bench_hostile.sh`).
 //!
 //! `cargo run --release --example hostile_inputs -- OUT_DIR [BYTES]` (default 10,000,000).
+// An example stops at the first error, with its message.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 #[path = "../tests/support/hostile.rs"]
 mod hostile;
 

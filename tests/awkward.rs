@@ -1,6 +1,8 @@
 //! The awkward shapes: each is segmented, its enclosure is checked by the independent
 //! verifier (`bvseg-verify`, on the written volumes file), and its tightness against a bound
 //! that a sound result meets with room to spare.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 #[path = "support/verify_input.rs"]
 mod verify_input;
 

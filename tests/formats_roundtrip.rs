@@ -1,5 +1,7 @@
 //! The same solid as OBJ, as STL and as GLB under a non-trivial node transform gives the same
 //! volumes, up to that transform.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 
 use bvseg::shapes::{capsule, ellipsoid, union};

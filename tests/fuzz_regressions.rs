@@ -1,5 +1,7 @@
 //! Replays every input the fuzzers (`fuzz/`) ever crashed or hung on, saved under
 //! `tests/data/fuzz-regressions/<target>/`, through the same checks as the fuzz targets.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 #[path = "support/fuzz_input.rs"]
 mod fuzz_input;
 

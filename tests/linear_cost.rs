@@ -5,6 +5,8 @@
 //! are in `benches/hostile.rs`.
 //!
 //! One test function, so that nothing else in this process adds to the counter meanwhile.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 #[path = "support/hostile.rs"]
 mod hostile;
 

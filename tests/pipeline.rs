@@ -1,4 +1,6 @@
 //! End-to-end properties of the segmentation on analytic shapes and the bundled meshes.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use bvseg::internals::Grid;
 use bvseg::internals::{is_connected, solid_components};
 use bvseg::shapes::{capsule, ellipsoid, union};

@@ -3,6 +3,8 @@
 //!
 //! Case counts are small (each case runs whole segmentations); proptest shrinks any failure
 //! to a small reproducible case.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 #[path = "support/verify_input.rs"]
 mod verify_input;
 

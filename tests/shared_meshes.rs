@@ -2,6 +2,8 @@
 //! its part, and no gap is left inside the solid between parts. Always on the bundled meshes
 //! (`assets/meshes`); on the shared test set (`../shared/meshes`, beside the repository, or
 //! `$BVSEG_SHARED/meshes`) with `--ignored`, which `.ci/run` passes when that set is there.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use bvseg::internals::Grid;
 use bvseg::{segment, BoundingKind, Params};
 use std::path::{Path, PathBuf};

@@ -1,6 +1,8 @@
 //! A corpus of malformed and hostile mesh files, written by the test: each must end in one
 //! error line naming the file, exit code 2, no panic and no output file. Merely imperfect
 //! meshes must work with a warning.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 use std::path::Path;
 use std::process::{Command, Output};

@@ -1,4 +1,6 @@
 //! End-to-end runs of the `bvseg` binary.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 use std::path::Path;
 use std::process::Output;

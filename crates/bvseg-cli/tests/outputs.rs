@@ -1,4 +1,6 @@
 //! `segment` with several outputs, `--json`, `--plot`, `--strict`, limits; `info`; `batch`.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 use std::path::Path;
 use std::process::Output;

@@ -1,4 +1,6 @@
 //! End-to-end runs of `bvseg verify`: exit 0 when enclosed, 1 when not, 2 on bad input.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -2,13 +2,20 @@
 //!
 //! Every mesh is closed and outward-facing. [`union`] concatenates meshes into one (possibly
 //! self-intersecting) mesh, which bvseg's inside test reads as the union of the solids.
+//!
+//! # Panics
+//!
+//! The builders panic when a parameter is not finite or beyond [`crate::MAX_COORDINATE`]
+//! (they are for tests and demos; build a [`Mesh`] with [`Mesh::new`] from untrusted data).
 use glam::{DMat3, DVec3};
 
 use crate::Mesh;
 
+#[allow(clippy::expect_used)]
 fn mesh(v: Vec<DVec3>, t: Vec<[u32; 3]>) -> Mesh {
-    // The generators below only produce finite vertices and in-range indices.
-    Mesh::new(v, t).expect("generated meshes are valid")
+    // The generators below only produce in-range indices, and finite vertices from finite
+    // parameters (see the module's docs).
+    Mesh::new(v, t).expect("shape parameters must be finite")
 }
 
 /// An oriented box with centre `c`, half-extents `half` and rotation `rot`.

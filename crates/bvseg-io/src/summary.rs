@@ -107,11 +107,15 @@ impl RunSummary {
 
     /// One line of JSON with the keys in the order of the fields: the page contract (`k`,
     /// `tov`, `mov`, `f`) first. What the viewer reports.
+    // Strings, numbers (non-finite ones become null) and string-keyed maps: serde_json
+    // cannot fail on them.
+    #[allow(clippy::expect_used)]
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).expect("a RunSummary always serializes")
     }
 
     /// One line of JSON with the keys sorted, as `bvseg segment --json` prints it.
+    #[allow(clippy::expect_used)]
     pub fn to_json_sorted(&self) -> String {
         let mut v = serde_json::to_value(self).expect("a RunSummary always serializes");
         v.sort_all_objects();

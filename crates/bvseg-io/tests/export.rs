@@ -1,5 +1,7 @@
 //! The engine-ready outputs read back: GLB through the `gltf` crate, MJCF as XML, OBJ through
 //! our own reader.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 
 use bvseg_core::{BoundingKind, BoundingVolume, Metrics, Part, Segmentation, Shape};

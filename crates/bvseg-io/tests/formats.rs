@@ -1,5 +1,7 @@
 //! The mesh readers: the same solid written as OBJ, STL (binary and ASCII) and glTF (every
 //! buffer kind, indexed or not, under a node transform) loads as the same mesh.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 
 use bvseg_io::{load, load_bytes, LoadOptions};

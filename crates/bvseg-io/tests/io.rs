@@ -1,4 +1,6 @@
 //! File-level behaviour of bvseg-io: loading from paths, atomic writes, JSON files.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
 use std::path::Path;
 

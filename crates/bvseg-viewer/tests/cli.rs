@@ -1,4 +1,6 @@
 //! The native binary's command line (only the paths that exit before a window opens).
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::process::Command;
 
 fn viewer(args: &[&str]) -> (i32, String, String) {

@@ -1,5 +1,7 @@
 //! The viewer's panels driven as a user would, through AccessKit (egui_kittest): change the
 //! controls, run, and check what the app did.
+// Tests and benchmarks state their expectations by panicking.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::cell::RefCell;
 use std::rc::Rc;
 

@@ -62,7 +62,7 @@ const ORIENT_ERR: f64 = 1e-15;
 /// Inputs up to this many points skip the [`DirMap`].
 const DIRMAP_MIN_POINTS: usize = 2000;
 
-/// The convex hull of `points` (see [`Hull`]). Deterministic: the same input gives the same
+/// The convex hull of `points` (see `Hull`). Deterministic: the same input gives the same
 /// output, vertex and face order included. Non-finite points are ignored.
 pub fn convex_hull(points: &[DVec3]) -> Hull {
     hull(points, true)

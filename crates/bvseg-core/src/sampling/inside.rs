@@ -84,14 +84,14 @@ pub fn column_budget(cells: f64) -> u64 {
 /// outer shell. Centres exactly on the surface are decided by a consistent symbolic
 /// perturbation (an axis-aligned box `[a, b)` in lattice units holds the centres
 /// `a <= i < b`). Meshes with holes or inconsistent orientation get a majority vote over
-/// rays along the three axes, counted from both ends. See the [module docs](self).
+/// rays along the three axes, counted from both ends. See the module docs of `sampling::inside`.
 ///
 /// Returns all `false` when `h` is not a positive finite number or `origin` is not finite.
 /// The result does not depend on the number of threads.
 ///
 /// # Errors
 ///
-/// [`Error::TooComplex`] when the triangles would scan more than [`column_budget`] lattice
+/// [`Error::TooComplex`] when the triangles would scan more than `column_budget` lattice
 /// columns.
 pub fn inside_cells(
     mesh: &Mesh,
