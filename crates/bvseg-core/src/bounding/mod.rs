@@ -1,7 +1,5 @@
 //! Stage 6: bounding volumes of a part's points.
 //!
-//! - [`legendre`]: the part's Legendre ellipsoid scaled until it holds the part (fast; used
-//!   during refinement).
 //! - [`mvee`]: the minimum-volume enclosing ellipsoid (output).
 //! - [`obb`]: a tight oriented bounding box (output).
 //! - [`hull`]: the convex hull, which both of the above work on.
