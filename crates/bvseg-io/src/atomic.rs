@@ -11,6 +11,10 @@ use crate::IoError;
 /// file `.<name>.tmp-<pid>-<n>` in the same directory (a rename is only atomic within one file
 /// system), is flushed to disk, and is then renamed over `path`. On any error the temporary
 /// file is removed and `path` is left as it was.
+///
+/// # Errors
+///
+/// [`IoError::Io`] naming the file when it cannot be created, written, flushed or renamed.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), IoError> {
     let path = path.as_ref();
     let name = path.display().to_string();

@@ -155,6 +155,10 @@ pub fn to_json_string(seg: &Segmentation) -> String {
 }
 
 /// Writes [`to_json_string`] of `seg` to `path` atomically (see [`write_atomic`]).
+///
+/// # Errors
+///
+/// As [`write_atomic`].
 pub fn write_json(path: impl AsRef<Path>, seg: &Segmentation) -> Result<(), IoError> {
     write_atomic(path, to_json_string(seg).as_bytes())
 }

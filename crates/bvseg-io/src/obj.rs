@@ -260,8 +260,7 @@ impl<R: BufRead> Read for PositionLines<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bvseg_core::Mesh;
-    use std::collections::{HashMap, HashSet};
+    use std::collections::HashSet;
 
     fn load(text: &str) -> Result<LoadedMesh, IoError> {
         read_obj(text.as_bytes(), "t.obj", None)
@@ -272,18 +271,6 @@ mod tests {
             Ok(m) => panic!("expected an error, got {m:?}"),
             Err(e) => e.to_string(),
         }
-    }
-
-    /// Closed: every directed edge is matched by its reverse.
-    fn is_closed(mesh: &Mesh) -> bool {
-        let mut edges = HashMap::<(u32, u32), i32>::new();
-        for t in mesh.triangles() {
-            for j in 0..3 {
-                let (a, b) = (t[j], t[(j + 1) % 3]);
-                *edges.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { -1 };
-            }
-        }
-        edges.values().all(|&c| c == 0)
     }
 
     const CUBE_VERTS: &str =
@@ -324,7 +311,7 @@ mod tests {
         let l = load(&cube_with_normals()).unwrap();
         assert_eq!(l.mesh.vertices().len(), 8);
         assert_eq!(l.mesh.triangles().len(), 12);
-        assert!(is_closed(&l.mesh));
+        assert!(l.mesh.is_closed());
         assert_eq!(l.stats.degenerate, 0);
         assert!((l.mesh.signed_volume() - 1.0).abs() < 1e-12);
     }
@@ -343,7 +330,7 @@ mod tests {
             l.stats.welded > 0,
             "tobj copies shared positions per object"
         );
-        assert!(is_closed(&l.mesh));
+        assert!(l.mesh.is_closed());
     }
 
     #[test]
@@ -388,7 +375,7 @@ mod tests {
         assert_eq!(l.stats.vertices_read, 24);
         assert_eq!(l.stats.welded, 16);
         assert_eq!(l.mesh.vertices().len(), 8);
-        assert!(is_closed(&l.mesh));
+        assert!(l.mesh.is_closed());
     }
 
     #[test]
@@ -436,7 +423,7 @@ mod tests {
         let bytes = include_bytes!("../../../assets/meshes/bunny.obj");
         let l = read_obj(&bytes[..], "bunny.obj", None).unwrap();
         assert_eq!(l.mesh.triangles().len(), 3674);
-        assert!(is_closed(&l.mesh));
+        assert!(l.mesh.is_closed());
         let used: HashSet<u32> = l.mesh.triangles().iter().flatten().copied().collect();
         assert_eq!(used.len(), l.mesh.vertices().len());
     }

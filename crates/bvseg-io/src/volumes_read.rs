@@ -47,6 +47,11 @@ pub struct VolumesFile {
 }
 
 /// Reads and validates a `bvseg.volumes/1` file.
+///
+/// # Errors
+///
+/// [`IoError::Io`] when the file cannot be read, [`IoError::TooLarge`] beyond
+/// [`crate::MAX_VOLUMES_BYTES`], and the errors of [`parse_volumes`].
 pub fn read_volumes(path: impl AsRef<Path>) -> Result<VolumesFile, IoError> {
     let path = path.as_ref();
     let name = path.display().to_string();
@@ -65,6 +70,11 @@ pub fn read_volumes(path: impl AsRef<Path>) -> Result<VolumesFile, IoError> {
 }
 
 /// Parses and validates a `bvseg.volumes/1` document; `name` is used in error messages.
+///
+/// # Errors
+///
+/// [`IoError::Parse`] naming what is wrong: not JSON, another schema, a missing or
+/// mistyped field, a volume that is not finite, or more than [`crate::MAX_VOLUMES`] volumes.
 pub fn parse_volumes(bytes: &[u8], name: &str) -> Result<VolumesFile, IoError> {
     let fail = |message: String| IoError::Parse {
         name: name.to_owned(),

@@ -42,6 +42,10 @@ pub fn bundled(name: &str) -> Option<&'static BundledMesh> {
 }
 
 /// Loads a bundled mesh; the bundled files are valid, but the error path is kept honest.
+///
+/// # Errors
+///
+/// As [`load_mesh_bytes`].
 pub fn load_bundled(m: &BundledMesh) -> Result<Mesh, String> {
     load_mesh_bytes(m.bytes, m.file).map(|l| l.mesh)
 }
@@ -65,6 +69,10 @@ pub struct LoadedFile {
 /// (bundled meshes, open file, drag and drop, the command line) goes through here. The error
 /// is one line naming the file; a `.gltf` whose buffers are separate files cannot be read
 /// from bytes alone, and its error says to use `.glb` or embedded buffers.
+///
+/// # Errors
+///
+/// The reader's error ([`bvseg_io::IoError`]) as one line naming the file.
 pub fn load_mesh_bytes(bytes: &[u8], name: &str) -> Result<LoadedFile, String> {
     let loaded = bvseg_io::load_bytes(bytes, name, &bvseg_io::LoadOptions::default())
         .map_err(|e| e.to_string())?;

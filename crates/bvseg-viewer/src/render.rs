@@ -77,6 +77,11 @@ fn header(gl: &glow::Context) -> Result<&'static str, String> {
 
 impl Renderer {
     /// Compiles the shader and creates the buffers.
+    ///
+    /// # Errors
+    ///
+    /// The driver's message when a shader does not compile or link, or a buffer cannot be
+    /// created.
     pub fn new(gl: &glow::Context) -> Result<Self, String> {
         let header = header(gl)?;
         // SAFETY: plain OpenGL calls on the context egui hands to the paint callback; every

@@ -52,6 +52,11 @@ impl Grid {
     /// The cell size starts from the mesh's enclosed volume (`h = (V / n)^(1/3)`) and is
     /// corrected once from the count actually found, so open or oddly oriented meshes, whose
     /// signed volume says little, still get close to `target`.
+    ///
+    /// # Errors
+    ///
+    /// [`Error::NoVolume`] when no cell lies inside, [`Error::TooComplex`] when the inside
+    /// test would exceed its work bound.
     pub fn from_mesh(mesh: &Mesh, target: usize) -> Result<Self, Error> {
         let (lo, hi) = mesh.bbox();
         let ext = hi - lo;

@@ -37,6 +37,10 @@ pub const OUTPUT_EXTENSIONS: &str = ".json, .glb, .xml (MJCF), .obj";
 
 impl OutputFormat {
     /// The format named by `path`'s extension.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::UnsupportedFormat`] for an extension that names no output format.
     pub fn from_path(path: &Path) -> Result<Self, IoError> {
         let ext = crate::extension(path);
         match ext.as_deref() {
@@ -63,6 +67,11 @@ pub struct ExportOptions<'a> {
 }
 
 /// Writes `seg` to `path` in the format its extension names, atomically.
+///
+/// # Errors
+///
+/// [`IoError::UnsupportedFormat`] for an unknown extension, and the errors of
+/// [`crate::write_atomic`].
 pub fn write_output(
     path: impl AsRef<Path>,
     seg: &Segmentation,
@@ -109,6 +118,10 @@ pub fn to_labels_with_dropped(seg: &Segmentation, dropped: &[usize]) -> String {
 }
 
 /// Writes [`to_labels_with_dropped`] to `path`, atomically.
+///
+/// # Errors
+///
+/// As [`crate::write_atomic`].
 pub fn write_labels(
     path: impl AsRef<Path>,
     seg: &Segmentation,
