@@ -5,7 +5,11 @@
 pub use bvseg_core::*;
 pub use bvseg_io as io;
 
-// The README's Rust examples are compiled and run as doctests.
+// The README's and the library manual's Rust examples are compiled and run as doctests.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/library.md")]
+pub struct LibraryManualDoctests;
