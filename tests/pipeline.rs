@@ -159,18 +159,24 @@ fn auto_mode_stops_only_when_tolerances_are_met_or_k_is_exhausted() {
     assert_eq!(seg.history.last().map(|s| s.k), Some(m.k));
     assert!(m.k <= params.max_k && m.tov.is_finite() && m.mov.is_finite());
     let peak = seg.history.iter().map(|s| s.k).max().unwrap_or(0);
-    let met = |t: f64, v: f64| t < params.tov && v < params.mov;
+    let pr_tol = params.max_protrusion * m.diagonal;
+    let met = |s: &bvseg::Step| s.tov < params.tov && s.protrusion < pr_tol;
     // Either some step met the tolerances, or k reached max_k (or the step guard ran out).
     assert!(
-        peak == params.max_k || seg.history.iter().any(|s| met(s.tov, s.mov)),
+        peak == params.max_k || seg.history.iter().any(met),
         "stopped at k {peak} without meeting the tolerances"
     );
     // Merges never break tolerances that were met.
     for w in seg.history.windows(2) {
-        if w[1].kind == bvseg::StepKind::Merge && met(w[0].tov, w[0].mov) {
-            assert!(met(w[1].tov, w[1].mov));
+        if w[1].kind == bvseg::StepKind::Merge && met(&w[0]) {
+            assert!(met(&w[1]));
         }
     }
+    // The report's rule agrees with the history's last step.
+    assert_eq!(
+        seg.tolerances_met(&params),
+        Some(met(&seg.history[seg.history.len() - 1]))
+    );
 }
 
 #[test]

@@ -185,15 +185,15 @@ test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async 
   const { page, title, text, seconds, logs } = await runPage(`mesh=${MESH}&autorun=1`);
   assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
   const r = JSON.parse(text);
-  for (const key of ['tov', 'mov', 'f']) {
+  for (const key of ['tov', 'mov', 'f', 'protrusion', 'protrusion_rel']) {
     assert.ok(Number.isFinite(r[key]), `${key} = ${r[key]}`);
   }
   assert.ok(Number.isInteger(r.k) && r.k >= 2, `k = ${r.k}`);
   assert.ok(r.tov > 0 && r.f >= 1, text);
   assert.ok(r.samples > 15000 && r.samples < 25000, `samples = ${r.samples}`);
   console.log(
-    `# ${MESH}: k=${r.k} TOV=${r.tov.toFixed(4)} MOV=${r.mov.toFixed(4)} F=${r.f.toFixed(4)} ` +
-      `samples=${r.samples}; tolerances (0.3, 0.5) met: ${r.met}; run ${r.time_s.toFixed(2)} s ` +
+    `# ${MESH}: k=${r.k} TOV=${r.tov.toFixed(4)} protrusion=${r.protrusion_rel.toFixed(4)} of the diagonal ` +
+      `MOV=${r.mov.toFixed(4)} F=${r.f.toFixed(4)} samples=${r.samples}; tolerances (TOV 0.3, protrusion 0.05) met: ${r.met}; run ${r.time_s.toFixed(2)} s ` +
       `in the page (budget 3 s; ${r.core_s.toFixed(2)} s of it in the core, the rest drawing ${r.frames} frames), ` +
       `${seconds.toFixed(2)} s from navigation`,
   );

@@ -41,16 +41,26 @@ pub struct InputArgs {
 #[derive(Args, Debug, Clone)]
 pub struct ParamArgs {
     /// Exactly this many parts, instead of refining until the tolerances hold.
-    #[arg(long, value_name = "K", conflicts_with_all = ["tov", "mov"])]
+    #[arg(long, value_name = "K", conflicts_with_all = ["tov", "mov", "max_protrusion", "max_protrusion_abs"])]
     pub k: Option<usize>,
 
     /// Tolerance on the total outside volume TOV (relative to the mesh's volume).
     #[arg(long, value_name = "T", default_value_t = Params::default().tov)]
     pub tov: f64,
 
-    /// Tolerance on the largest per-part outside volume MOV.
-    #[arg(long, value_name = "M", default_value_t = Params::default().mov)]
-    pub mov: f64,
+    /// Tolerance on the protrusion (how far the volumes reach beyond the surface), as a
+    /// fraction of the mesh's bounding-box diagonal.
+    #[arg(long, value_name = "D", default_value_t = Params::default().max_protrusion)]
+    pub max_protrusion: f64,
+
+    /// Tolerance on the protrusion in mesh units (instead of --max-protrusion).
+    #[arg(long, value_name = "D", conflicts_with = "max_protrusion")]
+    pub max_protrusion_abs: Option<f64>,
+
+    /// Also refine until the largest per-part outside volume MOV is below M (the paper's
+    /// sigma_L; off by default: flat ends and pointed tips keep MOV above 0.5 whatever k).
+    #[arg(long, value_name = "M")]
+    pub mov: Option<f64>,
 
     /// Largest number of parts the tolerance loop may reach.
     #[arg(long, value_name = "N", default_value_t = Params::default().max_k)]
@@ -141,6 +151,8 @@ impl ParamArgs {
             k: self.k,
             tov: self.tov,
             mov: self.mov,
+            max_protrusion: self.max_protrusion,
+            max_protrusion_abs: self.max_protrusion_abs,
             max_k: self.max_k,
             merge: !self.no_merge,
             polish: !self.no_polish,

@@ -1,5 +1,5 @@
-//! `--plot FILE.svg`: TOV and MOV against k over the refinement, with the tolerance lines,
-//! as a self-contained SVG written by hand.
+//! `--plot FILE.svg`: TOV and the protrusion (relative to the box diagonal) against k over the
+//! refinement, with the tolerance lines, as a self-contained SVG written by hand.
 use std::fmt::Write;
 
 use bvseg_core::{Params, Segmentation};
@@ -18,12 +18,18 @@ pub fn svg(seg: &Segmentation, params: &Params, name: &str) -> String {
     let steps = &seg.history;
     let k_max = steps.iter().map(|s| s.k).max().unwrap_or(1).max(2) as f64;
     let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+    // The protrusion is drawn as a fraction of the box diagonal.
+    let diag = seg.metrics.diagonal.max(f64::MIN_POSITIVE);
+    let rel = |st: &bvseg_core::Step| st.protrusion / diag;
+    let pr_tol = params
+        .max_protrusion_abs
+        .map_or(params.max_protrusion, |a| a / diag);
     let mut y_max = steps
         .iter()
-        .map(|s| finite(s.tov).max(finite(s.mov)))
+        .map(|s| finite(s.tov).max(finite(rel(s))))
         .fold(0.0f64, f64::max);
     if params.k.is_none() {
-        y_max = y_max.max(params.tov).max(params.mov);
+        y_max = y_max.max(params.tov).max(pr_tol);
     }
     let y_max = nice_ceiling(y_max.max(1e-3));
     let x = |k: f64| LEFT + (k - 1.0) / (k_max - 1.0) * (W - LEFT - RIGHT);
@@ -78,7 +84,7 @@ pub fn svg(seg: &Segmentation, params: &Params, name: &str) -> String {
     if params.k.is_none() {
         for (v, color, label) in [
             (params.tov, TOV_COLOR, "TOV tolerance"),
-            (params.mov, MOV_COLOR, "MOV tolerance"),
+            (pr_tol, MOV_COLOR, "protrusion tolerance"),
         ] {
             let yy = y(v);
             let _ = writeln!(
@@ -93,12 +99,12 @@ pub fn svg(seg: &Segmentation, params: &Params, name: &str) -> String {
     // The curves, in step order (a backtrack returns to a smaller k).
     for (pick, color, label, ly) in [
         (0, TOV_COLOR, "TOV", TOP + 4.0),
-        (1, MOV_COLOR, "MOV", TOP + 20.0),
+        (1, MOV_COLOR, "protrusion / diagonal", TOP + 20.0),
     ] {
         let pts: Vec<String> = steps
             .iter()
             .map(|st| {
-                let v = if pick == 0 { st.tov } else { st.mov };
+                let v = if pick == 0 { st.tov } else { rel(st) };
                 format!("{:.1},{:.1}", x(st.k as f64), y(v))
             })
             .collect();

@@ -55,12 +55,13 @@ impl Progress {
         match self {
             Progress::Quiet => {}
             Progress::Lines => eprintln!(
-                "[{:<9}] k={:<3} F={:.6}  TOV={:.6}  MOV={:.6}",
+                "[{:<9}] k={:<3} F={:.6}  TOV={:.6}  MOV={:.6}  protrusion={:.6}",
                 s.kind.as_str(),
                 s.k,
                 s.f,
                 s.tov,
-                s.mov
+                s.mov,
+                s.protrusion
             ),
             Progress::Bar(bar) => {
                 bar.set_position(s.k as u64);

@@ -122,30 +122,44 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
         print_summary(&name, &loaded, &seg, seconds, &args.output)?;
     }
     if met == Some(false) {
-        let m = seg.metrics;
+        let (what, hint) = unmet_message(&seg, &params);
         if args.params.strict {
-            eprintln!(
-                "bvseg: error: {name}: tolerances not met at k = {} (TOV {:.3} vs {}, MOV {:.3} vs {})",
-                m.k, m.tov, params.tov, m.mov, params.mov
-            );
+            eprintln!("bvseg: error: {name}: {what}");
             return Ok(ExitCode::from(EXIT_TOLERANCE));
         }
         if !args.quiet {
-            // Parts ending in a flat end or a pointed tip keep MOV up whatever the number of
-            // parts (README, "What MOV can reach"): more parts only help TOV.
-            let hint = if m.tov >= params.tov {
-                "raise --max-k or --tov, or try --bv mixed"
-            } else {
-                "flat ends and pointed tips keep MOV up whatever k (README, \"What MOV can reach\"); \
-                 raise --mov or try --bv mixed"
-            };
-            eprintln!(
-                "bvseg: warning: tolerances not met at k = {} (TOV {:.3} vs {}, MOV {:.3} vs {}); {hint}",
-                m.k, m.tov, params.tov, m.mov, params.mov
-            );
+            eprintln!("bvseg: warning: {what}; {hint}");
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// What a tolerance-mode run left unmet, naming only the tolerances it was asked for, and
+/// what would help.
+pub fn unmet_message(seg: &Segmentation, params: &Params) -> (String, String) {
+    let m = &seg.metrics;
+    let parts: Vec<String> = seg
+        .unmet(params)
+        .iter()
+        .map(|&(name, value, tol)| match name {
+            "tov" => format!("TOV {value:.3} vs {tol}"),
+            "protrusion" => format!(
+                "protrusion {:.4} vs {:.4} of the diagonal",
+                value / m.diagonal,
+                tol / m.diagonal
+            ),
+            _ => format!("MOV {value:.3} vs {tol}"),
+        })
+        .collect();
+    let what = format!("tolerances not met at k = {} ({})", m.k, parts.join(", "));
+    let mov_only = seg.unmet(params).iter().all(|u| u.0 == "mov");
+    let hint = if mov_only {
+        "flat ends and pointed tips keep MOV up whatever k (docs/method.md, \"What MOV can \
+         reach\"); raise --mov or leave it out"
+    } else {
+        "raise --max-k or --samples, or loosen --tov or --max-protrusion"
+    };
+    (what, hint.to_owned())
 }
 
 /// Every output checked before the (possibly long) run.
@@ -200,6 +214,7 @@ fn print_summary(
          k          {} ({})\n\
          F          {:.6}\n\
          TOV        {:.6}\n\
+         protrusion {:.6} of the diagonal ({:.6})\n\
          MOV        {:.6}\n\
          time       {seconds:.2} s\n\
          output     {written}\n",
@@ -209,6 +224,8 @@ fn print_summary(
         seg.kind.as_str(),
         m.f,
         m.tov,
+        m.protrusion_rel,
+        m.protrusion,
         m.mov,
     );
     write_stdout(&text)

@@ -146,6 +146,14 @@ fn summary(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> String {
             reported(file.reported.mov)
         );
     }
+    if r.boundary_points > 0 {
+        s += &format!(
+            "protrusion  {:.4} x diagonal, {} points of the union's boundary{}\n",
+            r.protrusion_rel,
+            r.boundary_points,
+            reported(file.reported.protrusion_rel)
+        );
+    }
     s += &format!(
         "interior    {:.3} % covered\n\
          grid        {} x {} x {} points, seed {}\n",
@@ -184,6 +192,10 @@ fn json_report(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> serde
         "ov": r.ov,
         "ov_se": r.ov_se,
         "coverage_interior": r.coverage_interior,
+        "protrusion": r.protrusion,
+        "protrusion_rel": r.protrusion_rel,
+        "boundary_points": r.boundary_points,
+        "reported_protrusion_rel": file.reported.protrusion_rel,
         "reported_tov": file.reported.tov,
         "reported_mov": file.reported.mov,
         "grid": r.grid,

@@ -146,6 +146,54 @@ fn tolerance_mode_runs() {
     assert!(parse(&dir.join("v.json"))["metrics"]["k"].as_u64().unwrap() <= 4);
 }
 
+/// The README's first command, as a new user runs it: the defaults on the bundled bunny end
+/// with every tolerance met, and nothing on stderr but the note about the bundled mesh.
+#[test]
+fn the_first_run_ends_met_without_a_warning() {
+    let dir = scratch("the_first_run_ends_met_without_a_warning");
+    let o = bvseg(&dir, &["segment", "--json", "-o", "v.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("warning"), "{err}");
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(summary["tolerances_met"], true, "{summary}");
+    let t = &summary["tolerances"];
+    assert!(summary["tov"].as_f64().unwrap() < t["tov"].as_f64().unwrap());
+    assert!(summary["protrusion"].as_f64().unwrap() < t["protrusion"].as_f64().unwrap());
+    assert!(t["mov"].is_null());
+    // --strict agrees: exit 0.
+    let o = bvseg(&dir, &["segment", "--strict", "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// A tolerance the run cannot meet is named in the warning with what would help; a
+/// tolerance nobody asked for (MOV, by default) is not mentioned.
+#[test]
+fn an_unmet_tolerance_is_named_with_a_hint() {
+    let dir = scratch("an_unmet_tolerance_is_named_with_a_hint");
+    let o = segment(&dir, &["--max-k", "2", "--max-protrusion", "0.001"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let warning = |err: &str| {
+        err.lines()
+            .find(|l| l.starts_with("bvseg: warning: tolerances not met at k = "))
+            .map(str::to_owned)
+            .unwrap_or_else(|| panic!("no warning in {err}"))
+    };
+    let w = warning(&err);
+    assert!(w.contains("protrusion") && w.contains("--max-k"), "{w}");
+    assert!(!w.contains("MOV"), "{w}");
+    let o = segment(
+        &dir,
+        &["--max-k", "2", "--max-protrusion", "0.001", "--strict"],
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    // Asked for, MOV is judged too.
+    let o = segment(&dir, &["--max-k", "2", "--mov", "0.01"]);
+    let w = warning(&stderr(&o));
+    assert!(w.contains("MOV ") && w.contains(" vs 0.01"), "{w}");
+}
+
 #[test]
 fn missing_mesh_fails_cleanly() {
     let dir = scratch("missing_mesh_fails_cleanly");

@@ -89,6 +89,15 @@ pub enum ParamError {
         /// The value given.
         value: f64,
     },
+    /// [`crate::Params::max_protrusion`] or [`crate::Params::max_protrusion_abs`] is not
+    /// finite or not above 0.
+    #[error("{field} must be finite and above 0, got {value}")]
+    Protrusion {
+        /// `"max_protrusion"` or `"max_protrusion_abs"`.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+    },
     /// [`crate::Params::max_k`] is outside `1..=max`.
     #[error("max_k must be between 1 and {max}, got {value}")]
     MaxK {

@@ -6,7 +6,7 @@
 //! that differ in a few parts; the cache makes each try cost only the parts it changed.
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
 
@@ -14,7 +14,7 @@ use crate::bounding::hull::hull_points;
 use crate::bounding::mvee::mvee_of_hull;
 use crate::bounding::obb::min_obb;
 use crate::enclosure::Enclosure;
-use crate::metrics::{outside_cells, Cell};
+use crate::metrics::{outside_cells, protrusion_capped, Cell, SurfaceDistance};
 use crate::moments::Moments;
 use crate::partition::Solid;
 use crate::{BoundingKind, BoundingVolume, Cancel, Mesh};
@@ -32,6 +32,9 @@ pub struct Fit {
     pub volume: BoundingVolume,
     /// Lattice cells outside the solid whose centres the volume contains.
     pub outside: Vec<Cell>,
+    /// The volume's own protrusion (see [`crate::metrics::protrusion`]), measured when first
+    /// asked for: only the fits of states the refinement judges need it.
+    protrusion: OnceLock<f64>,
 }
 
 /// Cache key: the part's exact moments.
@@ -64,6 +67,11 @@ pub struct Fitter {
     cancel: Cancel,
     cells: AtomicU64,
     budget: u64,
+    surface: SurfaceDistance,
+    /// Nodes and triangles of the surface's tree the protrusions have visited, and the
+    /// bound on them (see [`crate::refine::budget::DISTANCE_PER_SAMPLE`]).
+    distance_spent: AtomicU64,
+    distance_budget: u64,
 }
 
 /// A two-generation cache with a memory budget: when the young generation outgrows
@@ -112,16 +120,17 @@ impl FitCache {
 impl Fitter {
     /// A fitter for `mesh` sampled as `solid`.
     pub fn new(mesh: &Mesh, solid: &Solid, kind: BoundingKind) -> Self {
-        Self::with_budget(mesh, solid, kind, u64::MAX, Cancel::new())
+        Self::with_budget(mesh, solid, kind, [u64::MAX; 2], Cancel::new())
     }
 
-    /// A fitter whose [`Fitter::exhausted`] says so once its fits have counted `budget`
-    /// outside cells, or `cancel` is set.
+    /// A fitter whose [`Fitter::exhausted`] says so once its fits have counted `budget[0]`
+    /// outside cells, or `cancel` is set, and whose protrusions search the surface exactly
+    /// until they have visited `budget[1]` nodes and triangles of its tree.
     pub fn with_budget(
         mesh: &Mesh,
         solid: &Solid,
         kind: BoundingKind,
-        budget: u64,
+        [budget, distance_budget]: [u64; 2],
         cancel: Cancel,
     ) -> Self {
         Self {
@@ -131,6 +140,9 @@ impl Fitter {
             cancel,
             cells: AtomicU64::new(0),
             budget,
+            surface: SurfaceDistance::new(mesh),
+            distance_spent: AtomicU64::new(0),
+            distance_budget,
         }
     }
 
@@ -177,7 +189,69 @@ impl Fitter {
             hull,
             volume,
             outside,
+            protrusion: OnceLock::new(),
         }
+    }
+
+    /// The exact distances to the surface, for the final report.
+    pub fn surface(&self) -> &SurfaceDistance {
+        &self.surface
+    }
+
+    /// Each fit's own protrusion: the largest distance to the surface of its boundary outside
+    /// the solid (measured in parallel where not yet known, then kept with the fit). Exact
+    /// while the run's bound on the searches lasts, an upper bound beyond it (see
+    /// [`crate::metrics::protrusion_capped`]).
+    pub fn protrusions(&self, solid: &Solid, fits: &[Arc<Fit>]) -> Vec<f64> {
+        self.protrusions_of(
+            solid,
+            fits.iter()
+                .map(|f| (&f.volume, f.hull.as_slice(), Some(&f.protrusion)))
+                .collect(),
+            &[],
+        )
+    }
+
+    /// The protrusions of `volumes` (each with the points of the solid it holds, and where to
+    /// keep the figure, if anywhere) on the union's boundary with `others[i]` (empty: the
+    /// volume's own), within the run's bound on the searches. The bound is checked once per
+    /// call, and each volume's search has its own cap, so the figures do not depend on the
+    /// thread count.
+    #[allow(clippy::type_complexity)]
+    pub fn protrusions_of(
+        &self,
+        solid: &Solid,
+        volumes: Vec<(&BoundingVolume, &[DVec3], Option<&OnceLock<f64>>)>,
+        others: &[Vec<BoundingVolume>],
+    ) -> Vec<f64> {
+        let exact = self.distance_spent.load(Ordering::Relaxed) <= self.distance_budget;
+        let cap = if exact {
+            crate::refine::budget::DISTANCE_PER_FIT
+        } else {
+            0
+        };
+        let idx: Vec<usize> = (0..volumes.len()).collect();
+        let out = crate::parallel::map(&idx, |&i| {
+            let (v, points, keep) = volumes[i];
+            let none = Vec::new();
+            let o = others.get(i).unwrap_or(&none);
+            let measure = || protrusion_capped(v, &self.surface, &solid.grid, o, points, cap);
+            match keep {
+                Some(cell) => {
+                    let mut spent = 0;
+                    let value = *cell.get_or_init(|| {
+                        let (value, s) = measure();
+                        spent = s;
+                        value
+                    });
+                    (value, spent)
+                }
+                None => measure(),
+            }
+        });
+        let spent: u64 = out.iter().map(|o| o.1).sum();
+        self.distance_spent.fetch_add(spent, Ordering::Relaxed);
+        out.into_iter().map(|o| o.0).collect()
     }
 
     /// The cached fit of a part with moments `m`, if any.

@@ -67,7 +67,7 @@ mod volume;
 pub use cancel::Cancel;
 pub use error::{Error, MeshError, ParamError};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
-pub use params::{BoundingKind, Params, MAX_K, MAX_SAMPLES};
+pub use params::{BoundingKind, Params, DEFAULT_MAX_PROTRUSION, MAX_K, MAX_SAMPLES};
 pub use pipeline::Segmenter;
 pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind};
 pub use volume::{BoundingVolume, Shape};

@@ -15,6 +15,9 @@ pub struct Part {
     pub ov: f64,
     /// e-tightness of the part (1 for an ellipsoid, about 1.127 for a box).
     pub e: f64,
+    /// The largest distance to the mesh surface of the points of this part's volume on the
+    /// union's boundary, in mesh units (0 when the other volumes cover all of it).
+    pub protrusion: f64,
 }
 
 /// Summary figures of a segmentation, measured on the sampling lattice.
@@ -28,6 +31,13 @@ pub struct Metrics {
     pub tov: f64,
     /// Largest per-part outside volume.
     pub mov: f64,
+    /// The protrusion: the one-way Hausdorff distance from the boundary of the union of the
+    /// volumes to the mesh surface, in mesh units (the largest of the parts').
+    pub protrusion: f64,
+    /// [`Metrics::protrusion`] as a fraction of [`Metrics::diagonal`].
+    pub protrusion_rel: f64,
+    /// The diagonal of the mesh's bounding box, in mesh units.
+    pub diagonal: f64,
     /// Number of interior samples.
     pub samples: usize,
 }
@@ -78,6 +88,8 @@ pub struct Step {
     pub tov: f64,
     /// MOV after the step.
     pub mov: f64,
+    /// The protrusion after the step, in mesh units.
+    pub protrusion: f64,
 }
 
 /// A node of the bounding-volume hierarchy. Leaves are parts; inner nodes bound their two
@@ -122,18 +134,41 @@ pub struct Segmentation {
 
 impl Segmentation {
     /// Whether a tolerance-mode run (`params.k == None`) met its tolerances: TOV below
-    /// `params.tov` and MOV below `params.mov`. `None` for a run with a fixed k, which has no
-    /// tolerances to meet. The one rule the CLI, the summary and the viewer share.
+    /// `params.tov`, the protrusion below its tolerance, and MOV below `params.mov` if set.
+    /// `None` for a run with a fixed k, which has no tolerances to meet. The one rule the CLI,
+    /// the summary and the viewer share.
     #[must_use]
     pub fn tolerances_met(&self, params: &crate::Params) -> Option<bool> {
-        let figures = crate::refine::Figures {
-            tov: self.metrics.tov,
-            mov: self.metrics.mov,
+        params.k.is_none().then(|| self.unmet(params).is_empty())
+    }
+
+    /// Which tolerances a tolerance-mode run left unmet, by name (`"tov"`, `"protrusion"`,
+    /// `"mov"`), each with its value and its tolerance (the protrusion in mesh units). Empty
+    /// when every tolerance is met or the run had a fixed k.
+    #[must_use]
+    pub fn unmet(&self, params: &crate::Params) -> Vec<(&'static str, f64, f64)> {
+        if params.k.is_some() {
+            return Vec::new();
+        }
+        let m = &self.metrics;
+        let tol = crate::refine::Tolerances::of(params, m.diagonal);
+        let x = crate::refine::Figures {
+            tov: m.tov,
+            mov: m.mov,
+            protrusion: m.protrusion,
+            over: 0.0,
         };
-        params
-            .k
-            .is_none()
-            .then(|| crate::refine::Tolerances::of(params).met(figures))
+        let mut out = Vec::new();
+        if tol.tov_bad(x) {
+            out.push(("tov", m.tov, tol.tov));
+        }
+        if tol.protrusion_bad(x) {
+            out.push(("protrusion", m.protrusion, tol.protrusion));
+        }
+        if let Some(t) = tol.mov.filter(|_| tol.mov_bad(x)) {
+            out.push(("mov", m.mov, t));
+        }
+        out
     }
 
     /// The invariants every result keeps, checked before it is returned: one volume per part,
@@ -146,7 +181,10 @@ impl Segmentation {
             return bad("the part count is inconsistent");
         }
         let m = &self.metrics;
-        if ![m.f, m.tov, m.mov].iter().all(|x| x.is_finite()) {
+        if ![m.f, m.tov, m.mov, m.protrusion]
+            .iter()
+            .all(|x| x.is_finite())
+        {
             return bad("a figure of the result is not finite");
         }
         let finite = |v: &BoundingVolume| {
@@ -158,7 +196,7 @@ impl Segmentation {
         if !self
             .parts
             .iter()
-            .all(|p| finite(&p.volume) && p.ov.is_finite())
+            .all(|p| finite(&p.volume) && p.ov.is_finite() && p.protrusion.is_finite())
         {
             return bad("a volume of the result is not finite");
         }

@@ -195,8 +195,9 @@ pub struct Passes {
 /// push a part's OV past the per-part tolerance (`params.mov`, sigma_L) unless that part was
 /// already past it.
 pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize {
+    let tol = ctx.tolerances();
     let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
-    let (full_passes, mov_tol) = (passes.full, ctx.params.mov);
+    let (full_passes, mov_tol, pr_tol) = (passes.full, tol.mov_bound(), tol.protrusion);
     let passes = passes.total;
     let g = &solid.grid;
     let max_full = full_passes.max(1);
@@ -281,6 +282,15 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             {
                 continue;
             }
+            // Nor may a move make a part reach farther from the surface than the larger of
+            // its old reach and the tolerance (measured only for the moves that would be made).
+            let pr = fitter.protrusions(
+                solid,
+                &[fa.clone(), fb.clone(), fits[a].clone(), fits[b].clone()],
+            );
+            if pr[0] > pr[2].max(pr_tol) || pr[1] > pr[3].max(pr_tol) {
+                continue;
+            }
             cov.replace(old, new);
             apply(part, mv);
             fits[a] = fa;
@@ -308,8 +318,9 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
 /// the part with the largest OV and one of its neighbours (either way) when that lowers MOV
 /// and keeps TOV under `max(current TOV, params.tov)`. Up to `steps` moves; returns how many.
 pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> usize {
+    let tol = ctx.tolerances();
     let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
-    let (tov_tol, mov_tol) = (ctx.params.tov, ctx.params.mov);
+    let (tov_tol, mov_tol) = (tol.tov, tol.mov_bound());
     let total = solid.len() as f64;
     let min_part = min_part(solid, part);
     let mut moves = 0;

@@ -48,6 +48,7 @@ struct PartVolume {
     #[serde(flatten)]
     volume: Volume,
     fraction: f64,
+    protrusion: f64,
 }
 
 #[derive(Serialize)]
@@ -55,6 +56,9 @@ struct Metrics {
     k: usize,
     tov: f64,
     mov: f64,
+    protrusion: f64,
+    protrusion_rel: f64,
+    diagonal: f64,
     samples: usize,
     f: f64,
 }
@@ -66,6 +70,7 @@ struct Step {
     f: f64,
     tov: f64,
     mov: f64,
+    protrusion: f64,
 }
 
 #[derive(Serialize)]
@@ -104,6 +109,9 @@ pub fn to_json_string(seg: &Segmentation) -> String {
         k: m.k,
         tov: m.tov,
         mov: m.mov,
+        protrusion: m.protrusion,
+        protrusion_rel: m.protrusion_rel,
+        diagonal: m.diagonal,
         samples: m.samples,
         f: m.f,
     };
@@ -123,6 +131,7 @@ pub fn to_json_string(seg: &Segmentation) -> String {
             compact(&PartVolume {
                 volume: Volume::from(&p.volume),
                 fraction: p.fraction,
+                protrusion: p.protrusion,
             })
         }),
     );
@@ -136,6 +145,7 @@ pub fn to_json_string(seg: &Segmentation) -> String {
                 f: s.f,
                 tov: s.tov,
                 mov: s.mov,
+                protrusion: s.protrusion,
             })
         }),
     );
@@ -190,6 +200,7 @@ mod tests {
                 samples: 70,
                 ov: 0.2,
                 e: 1.0,
+                protrusion: 0.05,
             },
             Part {
                 volume: volume(Shape::Obb, 1.0),
@@ -197,6 +208,7 @@ mod tests {
                 samples: 30,
                 ov: 0.1,
                 e: 1.127,
+                protrusion: 0.02,
             },
         ];
         Segmentation {
@@ -207,6 +219,9 @@ mod tests {
                 f: 1.05,
                 tov: 0.25,
                 mov: 0.2,
+                protrusion: 0.05,
+                protrusion_rel: 0.025,
+                diagonal: 2.0,
                 samples: 100,
             },
             history: vec![
@@ -216,6 +231,7 @@ mod tests {
                     f: 1.0,
                     tov: 0.9,
                     mov: 0.9,
+                    protrusion: 0.5,
                 },
                 CoreStep {
                     kind: StepKind::Split,
@@ -223,6 +239,7 @@ mod tests {
                     f: 1.05,
                     tov: 0.25,
                     mov: 0.2,
+                    protrusion: 0.05,
                 },
             ],
             hierarchy: vec![
@@ -274,6 +291,9 @@ mod tests {
         assert_eq!(m["mov"], 0.2);
         assert_eq!(m["samples"], 100);
         assert_eq!(m["f"], 1.05);
+        assert_eq!(m["protrusion"], 0.05);
+        assert_eq!(m["protrusion_rel"], 0.025);
+        assert_eq!(m["diagonal"], 2.0);
 
         let vols = doc["volumes"].as_array().unwrap();
         assert_eq!(vols.len(), 2);
@@ -283,7 +303,11 @@ mod tests {
         assert!((sum - 1.0).abs() < 1e-12);
         for (v, p) in vols.iter().zip(&seg.parts) {
             let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
-            assert_eq!(keys.len(), 5, "{keys:?}");
+            assert_eq!(
+                keys,
+                ["axes", "center", "fraction", "protrusion", "radii", "shape"]
+            );
+            assert_eq!(v["protrusion"], p.protrusion);
             assert_eq!(vec3(&v["center"]), p.volume.center.to_array());
             assert_eq!(vec3(&v["radii"]), p.volume.radii.to_array());
             let rows: Vec<DVec3> = v["axes"]

@@ -21,6 +21,11 @@ pub struct RunSummary {
     pub mov: f64,
     /// The objective F.
     pub f: f64,
+    /// The protrusion (one-way Hausdorff distance from the union's boundary to the surface),
+    /// in mesh units.
+    pub protrusion: f64,
+    /// The protrusion as a fraction of the bounding box's diagonal.
+    pub protrusion_rel: f64,
     /// The mesh, as the front end names it.
     pub mesh: String,
     /// Interior samples used.
@@ -73,15 +78,25 @@ pub struct ViewerSummary {
 pub struct Tolerances {
     /// Tolerance on TOV.
     pub tov: f64,
-    /// Tolerance on MOV.
-    pub mov: f64,
+    /// Tolerance on the protrusion, in mesh units.
+    pub protrusion: f64,
+    /// The same, as a fraction of the bounding box's diagonal.
+    pub protrusion_rel: f64,
+    /// Tolerance on MOV; `null` when MOV is not checked (the default).
+    pub mov: Option<f64>,
 }
 
 impl Tolerances {
-    /// The tolerances `params` sets, `None` with a fixed k (which has none).
-    pub fn of(params: &Params) -> Option<Self> {
+    /// The tolerances `params` set for the run `seg`, `None` with a fixed k (which has none).
+    pub fn of(params: &Params, seg: &Segmentation) -> Option<Self> {
+        let d = seg.metrics.diagonal;
+        let protrusion = params
+            .max_protrusion_abs
+            .unwrap_or(params.max_protrusion * d);
         params.k.is_none().then_some(Self {
             tov: params.tov,
+            protrusion,
+            protrusion_rel: protrusion / d.max(f64::MIN_POSITIVE),
             mov: params.mov,
         })
     }
@@ -97,6 +112,8 @@ impl RunSummary {
             tov: m.tov,
             mov: m.mov,
             f: m.f,
+            protrusion: m.protrusion,
+            protrusion_rel: m.protrusion_rel,
             mesh: mesh.to_owned(),
             samples: m.samples,
             kind: seg.kind.as_str(),
@@ -135,7 +152,7 @@ impl CliSummary {
     ) -> Self {
         Self {
             triangles,
-            tolerances: Tolerances::of(params),
+            tolerances: Tolerances::of(params, seg),
             tolerances_met: seg.tolerances_met(params),
             seconds,
             outputs,

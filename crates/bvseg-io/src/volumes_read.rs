@@ -31,6 +31,8 @@ pub struct ReportedMetrics {
     pub mov: Option<f64>,
     /// `metrics.samples`.
     pub samples: Option<f64>,
+    /// `metrics.protrusion_rel`.
+    pub protrusion_rel: Option<f64>,
 }
 
 /// A `bvseg.volumes/1` file as read.
@@ -145,6 +147,7 @@ pub fn parse_volumes(bytes: &[u8], name: &str) -> Result<VolumesFile, IoError> {
             tov: num("tov"),
             mov: num("mov"),
             samples: num("samples"),
+            protrusion_rel: num("protrusion_rel"),
         },
     })
 }

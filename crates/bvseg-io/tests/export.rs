@@ -20,6 +20,7 @@ fn part(shape: Shape, center: DVec3, radii: DVec3, euler: (f64, f64, f64)) -> Pa
         samples: 100,
         ov: 0.1,
         e: 1.0,
+        protrusion: 0.1,
     }
 }
 
@@ -46,6 +47,9 @@ fn seg() -> Segmentation {
             f: 1.1,
             tov: 0.2,
             mov: 0.3,
+            protrusion: 0.1,
+            protrusion_rel: 0.02,
+            diagonal: 5.0,
             samples: 200,
         },
         history: vec![],

@@ -196,6 +196,8 @@ fn run_summary_keeps_each_front_end_s_keys_and_order() {
             "mesh",
             "mov",
             "outputs",
+            "protrusion",
+            "protrusion_rel",
             "samples",
             "seconds",
             "tolerances",
@@ -225,14 +227,16 @@ fn run_summary_keeps_each_front_end_s_keys_and_order() {
         ..RunSummary::new("bunny.obj", &seg_t)
     };
     let text = cli.to_json_sorted();
-    assert!(
-        text.contains(&format!(
-            "\"tolerances\":{{\"mov\":{},\"tov\":{}}}",
-            tol.mov, tol.tov
-        )),
-        "{text}"
-    );
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let t = &v["tolerances"];
+    assert_eq!(t["tov"].as_f64(), Some(tol.tov), "{text}");
+    assert!(t["mov"].is_null(), "MOV is not checked by default: {text}");
+    let d = seg_t.metrics.diagonal;
+    assert_eq!(t["protrusion"].as_f64(), Some(tol.max_protrusion * d));
+    assert!(
+        text.contains("\"tolerances\":{\"mov\":null,\"protrusion\":"),
+        "keys sorted: {text}"
+    );
     assert_eq!(v["tolerances_met"].as_bool(), seg_t.tolerances_met(&tol));
 
     // The viewer: the page contract first, in its order.
@@ -254,7 +258,19 @@ fn run_summary_keeps_each_front_end_s_keys_and_order() {
     assert_eq!(
         keys(&text),
         [
-            "k", "tov", "mov", "f", "mesh", "samples", "kind", "met", "time_s", "core_s", "frames",
+            "k",
+            "tov",
+            "mov",
+            "f",
+            "protrusion",
+            "protrusion_rel",
+            "mesh",
+            "samples",
+            "kind",
+            "met",
+            "time_s",
+            "core_s",
+            "frames",
             "view"
         ]
     );

@@ -61,6 +61,7 @@ mod grid;
 mod inside;
 mod mesh;
 mod parallel;
+mod protrusion;
 mod vol;
 mod volumes;
 
@@ -91,6 +92,8 @@ pub struct VerifyOptions {
     /// Threads to run on, at least 1; `None`: [`std::thread::available_parallelism`] (one
     /// where that is unknown, as on wasm32). The report does not depend on it.
     pub threads: Option<usize>,
+    /// Points on the union's boundary for the protrusion; 0 skips it.
+    pub boundary_points: usize,
 }
 
 impl Default for VerifyOptions {
@@ -100,6 +103,7 @@ impl Default for VerifyOptions {
             seed: 0,
             tolerance: 1e-5,
             threads: None,
+            boundary_points: 40_000,
         }
     }
 }
@@ -165,6 +169,13 @@ pub struct VerifyReport {
     pub mov: Option<(f64, f64, usize)>,
     /// Share of the grid points inside S that lie in some volume.
     pub coverage_interior: f64,
+    /// The protrusion: the largest distance to the mesh surface of the boundary points of
+    /// the union (the one-way Hausdorff distance, sampled), in mesh units; 0 when skipped.
+    pub protrusion: f64,
+    /// [`Self::protrusion`] as a fraction of the mesh's bounding-box diagonal.
+    pub protrusion_rel: f64,
+    /// Boundary points the protrusion was taken over.
+    pub boundary_points: usize,
 }
 
 impl VerifyReport {
@@ -201,6 +212,11 @@ pub fn verify(
     let diag = (mhi - mlo).length();
     let tris = enclosure::triangle_enclosure(&mesh, &vols, opts.tolerance * diag, threads);
     let grid = grid::grid_metrics(&mesh, &vols, opts, threads)?;
+    let (protrusion, boundary_points) = if opts.boundary_points > 0 {
+        protrusion::protrusion(&mesh, &vols, opts.boundary_points, opts.seed, threads)
+    } else {
+        (0.0, 0)
+    };
 
     let mut report = VerifyReport {
         triangles: tris.len(),
@@ -223,6 +239,9 @@ pub fn verify(
         ov_se: None,
         mov: None,
         coverage_interior: grid.coverage_interior,
+        protrusion,
+        protrusion_rel: protrusion / diag.max(f64::MIN_POSITIVE),
+        boundary_points,
     };
     for (t, &(status, escape)) in tris.iter().enumerate() {
         match status {

@@ -78,6 +78,67 @@ impl Vol {
         }
     }
 
+    /// Whether `p` is inside the volume by more than rounding (`gauge < 1 - 1e-7`): such a
+    /// point of another volume's boundary is not on the union's boundary.
+    pub(crate) fn strictly_inside(&self, p: DVec3) -> bool {
+        let y = self.frame(p);
+        let t = [0, 1, 2].map(|j| y[j] / self.radii[j]);
+        let g = if self.obb {
+            t.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+        } else {
+            (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()
+        };
+        g < 1.0 - 1e-7
+    }
+
+    /// The boundary's area (Knud Thomsen's formula for the ellipsoid, within 1.1 %).
+    pub(crate) fn area(&self) -> f64 {
+        let [a, b, c] = self.radii;
+        if self.obb {
+            8.0 * (a * b + b * c + a * c)
+        } else {
+            let p = 1.6075;
+            4.0 * std::f64::consts::PI
+                * (((a * b).powf(p) + (a * c).powf(p) + (b * c).powf(p)) / 3.0).powf(1.0 / p)
+        }
+    }
+
+    /// A point of the boundary from three numbers in `[0, 1)`: on a box, a face chosen by
+    /// area and a uniform point of it; on an ellipsoid, the image of a uniform point of the
+    /// unit sphere.
+    pub(crate) fn boundary_point(&self, r: [f64; 3]) -> DVec3 {
+        let [a, b, c] = self.radii;
+        let local = if self.obb {
+            let faces = [b * c, a * c, a * b];
+            let total = 2.0 * (faces[0] + faces[1] + faces[2]);
+            let mut x = r[0] * total;
+            let mut axis = 0;
+            let mut sign = 1.0;
+            'pick: for (d, &f) in faces.iter().enumerate() {
+                for s in [1.0, -1.0] {
+                    if x < f || (d == 2 && s < 0.0) {
+                        axis = d;
+                        sign = s;
+                        break 'pick;
+                    }
+                    x -= f;
+                }
+            }
+            let mut t = [0.0; 3];
+            t[axis] = sign;
+            t[(axis + 1) % 3] = 2.0 * r[1] - 1.0;
+            t[(axis + 2) % 3] = 2.0 * r[2] - 1.0;
+            [t[0] * a, t[1] * b, t[2] * c]
+        } else {
+            let z = 2.0 * r[0] - 1.0;
+            let rho = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f64::consts::TAU * r[1];
+            [rho * phi.cos() * a, rho * phi.sin() * b, z * c]
+        };
+        // Back to the world: the rows are the axes.
+        self.center + self.rows[0] * local[0] + self.rows[1] * local[1] + self.rows[2] * local[2]
+    }
+
     /// Euclidean distance from `p` to the volume (0 inside, with the slack).
     pub(crate) fn distance(&self, p: DVec3) -> f64 {
         if self.contains(p) {

@@ -1,22 +1,32 @@
-//! A small plot of TOV and MOV against k over the refinement history, drawn with egui's
+//! A small plot of TOV and the protrusion (as a fraction of the box diagonal) against k over
+//! the refinement history, drawn with egui's
 //! painter (a plotting crate would be a large dependency for two polylines).
 use bvseg_core::{Step, StepKind};
 use eframe::egui::{self, Color32, Pos2, Rect, Sense, Shape, Stroke, Vec2};
 
 /// Colour of the TOV curve.
 pub const TOV_COLOR: Color32 = Color32::from_rgb(90, 160, 255);
-/// Colour of the MOV curve.
-pub const MOV_COLOR: Color32 = Color32::from_rgb(255, 150, 60);
+/// Colour of the protrusion curve.
+pub const PROTRUSION_COLOR: Color32 = Color32::from_rgb(255, 150, 60);
 
-/// The plot's data range: `(k_min, k_max, y_max)`.
-pub fn ranges(history: &[Step], tolerances: Option<(f64, f64)>) -> (f64, f64, f64) {
+/// The value a curve plots for a step.
+type Curve<'a> = &'a dyn Fn(&Step) -> f64;
+
+/// The protrusion of `s` as a fraction of the box diagonal `diagonal`.
+fn protrusion_rel(s: &Step, diagonal: f64) -> f64 {
+    s.protrusion / diagonal.max(f64::MIN_POSITIVE)
+}
+
+/// The plot's data range: `(k_min, k_max, y_max)`; `tolerances` are TOV's and the
+/// protrusion's (relative to `diagonal`).
+pub fn ranges(history: &[Step], tolerances: Option<(f64, f64)>, diagonal: f64) -> (f64, f64, f64) {
     // Every run starts at k >= 1; the axis starts there so runs compare at a glance.
     let k_min = 1.0;
     let k_max = history.iter().map(|s| s.k as f64).fold(2.0, f64::max);
     let tol = tolerances.map_or(0.0, |(t, m)| t.max(m));
     let y_max = history
         .iter()
-        .flat_map(|s| [s.tov, s.mov])
+        .flat_map(|s| [s.tov, protrusion_rel(s, diagonal)])
         .filter(|v| v.is_finite())
         .fold(tol, f64::max);
     (k_min, k_max, (y_max * 1.1).max(0.1))
@@ -28,6 +38,7 @@ pub fn show(
     ui: &mut egui::Ui,
     history: &[Step],
     tolerances: Option<(f64, f64)>,
+    diagonal: f64,
     selected: Option<usize>,
 ) -> Option<usize> {
     let size = Vec2::new(ui.available_width().max(120.0), 130.0);
@@ -39,7 +50,7 @@ pub fn show(
         rect.min + Vec2::new(30.0, 6.0),
         rect.max - Vec2::new(6.0, 18.0),
     );
-    let (k_min, k_max, y_max) = ranges(history, tolerances);
+    let (k_min, k_max, y_max) = ranges(history, tolerances, diagonal);
     let to_screen = |k: f64, y: f64| {
         let x = area.left() + ((k - k_min) / (k_max - k_min)) as f32 * area.width();
         let y = area.bottom() - (y.clamp(0.0, y_max) / y_max) as f32 * area.height();
@@ -82,7 +93,7 @@ pub fn show(
         text,
     );
     if let Some((t, m)) = tolerances {
-        for (v, c) in [(t, TOV_COLOR), (m, MOV_COLOR)] {
+        for (v, c) in [(t, TOV_COLOR), (m, PROTRUSION_COLOR)] {
             let (a, b) = (to_screen(k_min, v), to_screen(k_max, v));
             painter.extend(Shape::dashed_line(
                 &[a, b],
@@ -99,13 +110,10 @@ pub fn show(
             Stroke::new(1.0, visuals.text_color().gamma_multiply(0.5)),
         );
     }
-    for (value, colour) in [
-        (|s: &Step| s.tov) as fn(&Step) -> f64,
-        (|s: &Step| s.mov) as fn(&Step) -> f64,
-    ]
-    .into_iter()
-    .zip([TOV_COLOR, MOV_COLOR])
-    {
+    let tov = |s: &Step| s.tov;
+    let protrusion = |s: &Step| protrusion_rel(s, diagonal);
+    let curves: [(Curve, Color32); 2] = [(&tov, TOV_COLOR), (&protrusion, PROTRUSION_COLOR)];
+    for (value, colour) in curves {
         // Backtracks are rejected candidates: dots, not part of the path.
         let path: Vec<Pos2> = history
             .iter()
@@ -135,9 +143,9 @@ pub fn show(
     painter.text(
         area.right_top() + Vec2::new(-2.0, 14.0),
         egui::Align2::RIGHT_TOP,
-        "MOV",
+        "protrusion / diagonal",
         font,
-        MOV_COLOR,
+        PROTRUSION_COLOR,
     );
     // A click picks the last step at the clicked k.
     let pos = response
@@ -159,23 +167,25 @@ pub fn show(
 mod tests {
     use super::*;
 
-    fn step(k: usize, tov: f64, mov: f64) -> Step {
+    fn step(k: usize, tov: f64, protrusion: f64) -> Step {
         Step {
             kind: StepKind::Split,
             k,
             f: 1.0,
             tov,
-            mov,
+            mov: 0.0,
+            protrusion,
         }
     }
 
     #[test]
     fn ranges_cover_the_data_and_the_tolerances() {
-        let h = [step(1, 0.9, 0.9), step(5, 0.2, f64::NAN)];
-        let (a, b, y) = ranges(&h, Some((0.3, 0.5)));
+        // Diagonal 2: a protrusion of 1.8 is 0.9 of it.
+        let h = [step(1, 0.5, 1.8), step(5, 0.2, f64::NAN)];
+        let (a, b, y) = ranges(&h, Some((0.3, 0.05)), 2.0);
         assert_eq!((a, b), (1.0, 5.0));
         assert!((y - 0.99).abs() < 1e-12);
-        let (_, b, y) = ranges(&[], None);
+        let (_, b, y) = ranges(&[], None, 1.0);
         assert!(b > 1.0 && y > 0.0, "an empty plot still has a range");
     }
 }

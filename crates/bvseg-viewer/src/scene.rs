@@ -326,6 +326,7 @@ mod tests {
                 f: 1.0,
                 tov: 0.1,
                 mov: 0.1,
+                protrusion: 0.1,
             },
             volumes: Arc::new(vec![v]),
             triangle_parts: Arc::new(vec![0; 12]),

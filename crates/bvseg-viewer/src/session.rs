@@ -244,6 +244,12 @@ impl Session {
         self.calls
     }
 
+    /// The diagonal of the mesh's bounding box (the protrusion is shown relative to it).
+    pub fn diagonal(&self) -> f64 {
+        let (lo, hi) = self.mesh.bbox();
+        (hi - lo).length()
+    }
+
     /// Wall-clock time from the start to the end of the run, or so far.
     pub fn wall(&self) -> Duration {
         self.wall.unwrap_or_else(|| self.started.elapsed())

@@ -20,9 +20,13 @@
 //! the union's count as volumes change.
 mod cell;
 mod coverage;
+mod protrusion;
+mod surface;
 
 pub use cell::Cell;
 pub use coverage::Coverage;
+pub use protrusion::protrusion_capped;
+pub use surface::SurfaceDistance;
 
 use glam::DVec3;
 

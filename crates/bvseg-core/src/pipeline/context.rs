@@ -3,7 +3,8 @@ use std::sync::Arc;
 
 use crate::fitting::{Fit, Fitter};
 use crate::partition::{Partition, Solid};
-use crate::refine::budget::work_budget;
+use crate::refine::budget::{distance_budget, work_budget};
+use crate::refine::Tolerances;
 use crate::{Cancel, Mesh, Params};
 
 /// The mesh, its sampled solid (with its connected pieces), the parameters and the run's
@@ -15,15 +16,19 @@ pub(crate) struct Context {
     pub params: Params,
     pub fitter: Fitter,
     pub cancel: Cancel,
+    /// The diagonal of the mesh's bounding box: the protrusion tolerance is relative to it.
+    pub diagonal: f64,
 }
 
 impl Context {
     /// A run's context: the fitter gets the run's bound on optional work (see
     /// [`crate::refine::budget`]).
     pub fn new(mesh: &Mesh, solid: Solid, params: &Params, cancel: Cancel) -> Self {
-        let budget = work_budget(&solid);
+        let budget = [work_budget(&solid), distance_budget(&solid)];
         let fitter = Fitter::with_budget(mesh, &solid, params.bounding, budget, cancel.clone());
+        let (lo, hi) = mesh.bbox();
         Self {
+            diagonal: (hi - lo).length(),
             mesh: mesh.clone(),
             solid,
             params: params.clone(),
@@ -36,6 +41,11 @@ impl Context {
     pub fn fit_all(&mut self, part: &Partition) -> Vec<Arc<Fit>> {
         self.fitter
             .fit_all(&self.mesh, &self.solid, &part.labels, &part.parts)
+    }
+
+    /// The tolerances the parameters ask for, on this mesh.
+    pub fn tolerances(&self) -> Tolerances {
+        Tolerances::of(&self.params, self.diagonal)
     }
 
     /// Whether the run's optional work should stop: its bound is spent, or it was cancelled.

@@ -16,8 +16,9 @@ pub const TIGHTEN_PASSES: Passes = Passes { total: 40, full: 3 };
 /// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
 pub const RELIEVE_STEPS: usize = 40;
 
-/// `cur` polished, when [`crate::Params::polish`] asks for it and the work bound allows, and
-/// grown by the margin; the flag says whether the work bound cut the polish short.
+/// `cur` polished, when [`crate::Params::polish`] asks for it and the work bound allows,
+/// grown by the margin, and its protrusion measured on the union; the flag says whether the
+/// work bound cut the polish short.
 pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
     let mut cut = false;
     let mut out_of_work = |ctx: &Context| {
@@ -42,7 +43,35 @@ pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
     } else {
         cur
     };
-    (with_margin(ctx, cur), cut)
+    let mut cur = with_margin(ctx, cur);
+    // The figure of the result: each part's share of the union's boundary, exactly.
+    cur.pr = union_protrusions(ctx, &cur);
+    cur.protrusion = cur.pr.iter().copied().fold(0.0, f64::max);
+    (cur, cut)
+}
+
+/// For each volume of `cur`, the largest distance to the surface of its points on the
+/// union's boundary (see [`crate::metrics::protrusion`]).
+fn union_protrusions(ctx: &Context, cur: &State) -> Vec<f64> {
+    let volumes = &cur.volumes;
+    let others: Vec<Vec<BoundingVolume>> = (0..volumes.len())
+        .map(|i| {
+            let (lo, hi) = volumes[i].aabb();
+            // Only the volumes that can hold a point of this one's boundary.
+            (0..volumes.len())
+                .filter(|&j| j != i)
+                .map(|j| volumes[j])
+                .filter(|o| {
+                    let (l, h) = o.aabb();
+                    l.cmple(hi).all() && lo.cmple(h).all()
+                })
+                .collect()
+        })
+        .collect();
+    let list = (0..volumes.len())
+        .map(|i| (&volumes[i], cur.fits[i].hull.as_slice(), None))
+        .collect();
+    ctx.fitter.protrusions_of(&ctx.solid, list, &others)
 }
 
 /// `cur` with its ellipsoids reshaped to stick out less (see [`crate::reshaping`]), and
@@ -52,7 +81,7 @@ fn reshaped(ctx: &Context, cur: State) -> State {
     let min_r = 0.5 * ctx.solid.grid.h;
     let counts = cur.part.counts();
     let cells = cur.fits.iter().map(|f| f.outside.clone()).collect();
-    let (volumes, cells) = reshape(
+    let (mut volumes, mut cells) = reshape(
         &ctx.solid,
         &points,
         &cur.volumes,
@@ -61,6 +90,23 @@ fn reshaped(ctx: &Context, cur: State) -> State {
         min_r,
         work_budget(&ctx.solid),
     );
+    // A reshaped ellipsoid may not reach farther from the surface than the larger of the
+    // fitted one's reach and the tolerance: where it would, the fitted one stays.
+    let bound = ctx.tolerances().protrusion;
+    let changed: Vec<usize> = (0..volumes.len())
+        .filter(|&i| volumes[i] != cur.volumes[i])
+        .collect();
+    let list = changed
+        .iter()
+        .map(|&i| (&volumes[i], cur.fits[i].hull.as_slice(), None))
+        .collect();
+    let reach = ctx.fitter.protrusions_of(&ctx.solid, list, &[]);
+    for (&i, r) in changed.iter().zip(reach) {
+        if r > cur.pr[i].max(bound) {
+            volumes[i] = cur.volumes[i];
+            cells[i] = cur.fits[i].outside.clone();
+        }
+    }
     let cells: Vec<&[Cell]> = cells.iter().map(Vec::as_slice).collect();
     let o = outside_from_cells(&cells, &counts);
     cur.with_volumes(volumes, o)
@@ -89,6 +135,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             samples: cur.part.parts[i].n as usize,
             ov: cur.ov[i],
             e: cur.part.e(i),
+            protrusion: cur.pr[i],
         })
         .collect();
     let adjacency = cur.part.adjacency(&ctx.solid.grid);
@@ -105,6 +152,9 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             f: cur.f,
             tov: cur.tov,
             mov: cur.mov,
+            protrusion: cur.protrusion,
+            protrusion_rel: cur.protrusion / ctx.diagonal.max(f64::MIN_POSITIVE),
+            diagonal: ctx.diagonal,
             samples: ctx.solid.len(),
         },
         history,

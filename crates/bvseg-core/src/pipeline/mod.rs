@@ -4,11 +4,12 @@
 //! 2. **Start**: a CVT with one part per connected piece of the solid (or `k` parts with a
 //!    fixed k), **optimised** by the e-weighted Lloyd loop and the boundary polish
 //!    ([`crate::optimization`]).
-//! 3. **Refine** (tolerance mode): **judge** the output volumes; while TOV >= sigma_G or
-//!    MOV >= sigma_L and k < max_k, **split** a part and re-optimise it with its neighbours
-//!    ([`crate::refine::split`]), or **merge** the worst part away when only MOV is out of
-//!    tolerance ([`crate::refine::merge`]); **tighten** when splits stall near the tolerance
-//!    ([`crate::refine::checkpoint`]); stop when more parts stop helping
+//! 3. **Refine** (tolerance mode): **judge** the output volumes; while TOV >= sigma_G, or the
+//!    protrusion is at or above its tolerance, or (when asked for) MOV >= sigma_L, and
+//!    k < max_k, **split** a part for the first figure out of tolerance and re-optimise it with
+//!    its neighbours ([`crate::refine::split`]), or **merge** the worst part away when only MOV
+//!    is out of tolerance ([`crate::refine::merge`]); **tighten** when splits stall near the
+//!    TOV tolerance ([`crate::refine::checkpoint`]); stop when more parts stop helping
 //!    ([`crate::refine::patience`]).
 //! 4. **Merge** the pair whose merge lowers TOV most, while one does and the tolerances stay
 //!    met.
@@ -30,7 +31,7 @@ use crate::parallel::{join, threads};
 use crate::partition::{Partition, Solid};
 use crate::refine::checkpoint::{Checkpoints, CHECKPOINT_PASSES};
 use crate::refine::patience::MovPatience;
-use crate::refine::{merge, split, Tolerances};
+use crate::refine::{merge, split, Aim, Tolerances};
 use crate::sampling::Grid;
 use crate::tightening::tighten;
 use crate::{BoundingVolume, Cancel, Error, Mesh, Params, Segmentation, Step, StepKind};
@@ -65,6 +66,8 @@ enum Phase {
 pub struct Segmenter {
     ctx: Context,
     tol: Tolerances,
+    /// What the current split step aims to improve.
+    aim: Aim,
     phase: Phase,
     state: Option<State>,
     /// Parts left to try in the current split step (the next last), and the first try's
@@ -112,9 +115,11 @@ impl Segmenter {
             )));
         }
         let solid = Solid::new(grid);
+        let ctx = Context::new(mesh, solid, params, cancel);
         Ok(Self {
-            ctx: Context::new(mesh, solid, params, cancel),
-            tol: Tolerances::of(params),
+            tol: ctx.tolerances(),
+            ctx,
+            aim: Aim::Tov,
             phase: Phase::Start,
             state: None,
             tries: Vec::new(),
@@ -232,10 +237,10 @@ impl Segmenter {
         }
         let cur = self.state.as_ref()?;
         let k = cur.part.k();
-        if self.tol.met(cur.figures())
-            || k >= self.ctx.params.max_k
-            || k >= self.ctx.solid.len() / 2
-        {
+        let Some(aim) = self.tol.aim(cur.figures(&self.tol)) else {
+            return self.end_refinement();
+        };
+        if k >= self.ctx.params.max_k || k >= self.ctx.solid.len() / 2 {
             return self.end_refinement();
         }
         if self.tries.is_empty() && self.first_try.is_none() {
@@ -252,8 +257,7 @@ impl Segmenter {
                 let part = cur.part.clone();
                 return Some(self.checkpoint(part));
             }
-            if !self.tol.tov_bad(cur.figures()) {
-                // Only MOV is out of tolerance.
+            if aim == Aim::Mov {
                 if self.patience.run_out(cur.mov) {
                     return self.end_refinement();
                 }
@@ -262,16 +266,17 @@ impl Segmenter {
                 }
             }
             let cur = self.state.as_ref()?;
-            let tov_bad = self.tol.tov_bad(cur.figures());
-            self.tries = split::candidates(&cur.ov, &cur.part.counts(), tov_bad);
+            self.aim = aim;
+            self.tries = split::candidates(aim, &cur.ov, &cur.part.counts(), &cur.pr);
             self.tries.reverse();
         }
         self.split_next()
     }
 
     /// Try the next candidate split of the current step; keep it if it helps. When every try
-    /// failed, keep the first while TOV is out of tolerance, or end refinement.
+    /// failed, keep the first if [`split::keeps_first_anyway`] says so, or end refinement.
     fn split_next(&mut self) -> Option<Step> {
+        let aim = self.aim;
         while let Some(i) = self.tries.pop() {
             let cur = self.state.as_ref()?;
             let part = match self.pending.take() {
@@ -298,7 +303,8 @@ impl Segmenter {
             };
             let cand = State::evaluate(&mut self.ctx, part);
             let cur = self.state.as_ref()?;
-            if split::keeps(cur.figures(), cand.figures(), self.tol) {
+            let tol = self.tol;
+            if split::keeps(aim, cur.figures(&tol), cand.figures(&tol), tol) {
                 self.tries.clear();
                 self.first_try = None;
                 return Some(self.accept(StepKind::Split, cand));
@@ -311,13 +317,17 @@ impl Segmenter {
                 return Some(step);
             }
         }
-        let tov_bad = self
-            .state
-            .as_ref()
-            .is_some_and(|s| self.tol.tov_bad(s.figures()));
-        match self.first_try.take() {
-            Some(_) if !tov_bad => self.end_refinement(),
-            Some(s) => Some(self.accept(StepKind::Split, s)),
+        let first = self.first_try.take();
+        let tol = self.tol;
+        let keep = match (&self.state, &first) {
+            (Some(cur), Some(f)) => {
+                split::keeps_first_anyway(aim, cur.figures(&tol), f.figures(&tol), tol)
+            }
+            _ => false,
+        };
+        match first {
+            Some(s) if keep => Some(self.accept(StepKind::Split, s)),
+            Some(_) => self.end_refinement(),
             None => {
                 // No part could be split at all.
                 self.phase = Phase::Final;
@@ -339,12 +349,13 @@ impl Segmenter {
     fn merge_worst(&mut self) -> Option<Step> {
         let cur = self.state.as_ref()?;
         let worst = merge::worst(&cur.ov)? as u32;
-        let cur_mov = cur.mov;
         let pairs: Vec<(u32, u32)> = merge::pairs(&self.ctx, cur)
             .into_iter()
             .filter(|&(a, b)| a == worst || b == worst)
             .collect();
-        let (a, b) = merge::relieving(&self.options(&pairs), cur_mov, self.tol)?;
+        let figures = cur.figures(&self.tol);
+        let options = self.options(&pairs);
+        let (a, b) = merge::relieving(&options, figures, self.tol, self.protrusion_after())?;
         let s = self.merged(a, b)?;
         Some(self.accept(StepKind::Merge, s))
     }
@@ -366,8 +377,9 @@ impl Segmenter {
     /// The merge that lowers TOV most (keeping the tolerances if they are met), measured.
     fn best_merge(&mut self) -> Option<State> {
         let cur = self.state.as_ref()?;
-        let (pairs, figures) = (merge::pairs(&self.ctx, cur), cur.figures());
-        let (a, b) = merge::best(&self.options(&pairs), figures, self.tol)?;
+        let (pairs, figures) = (merge::pairs(&self.ctx, cur), cur.figures(&self.tol));
+        let options = self.options(&pairs);
+        let (a, b) = merge::best(&options, figures, self.tol, self.protrusion_after())?;
         self.merged(a, b)
     }
 
@@ -379,6 +391,25 @@ impl Segmenter {
         let (options, cut) = merge::options(&mut self.ctx, cur, pairs);
         self.budget_hit |= cut && !self.ctx.cancel.is_cancelled();
         options
+    }
+
+    /// The protrusion of the current state with parts `a` and `b` merged: the merged part's
+    /// fit (fitted by [`Segmenter::options`]) and the other parts'.
+    fn protrusion_after(&self) -> impl FnMut(usize, usize) -> f64 + '_ {
+        move |a, b| {
+            let Some(cur) = self.state.as_ref() else {
+                return f64::INFINITY;
+            };
+            let m = cur.part.parts[a].merged(&cur.part.parts[b]);
+            let Some(fit) = self.ctx.fitter.get(&m) else {
+                return f64::INFINITY;
+            };
+            let merged = self.ctx.fitter.protrusions(&self.ctx.solid, &[fit])[0];
+            (0..cur.pr.len())
+                .filter(|&i| i != a && i != b)
+                .map(|i| cur.pr[i])
+                .fold(merged, f64::max)
+        }
     }
 
     /// The current partition with parts `a` and `b` merged, measured.
@@ -397,6 +428,7 @@ impl Segmenter {
                 f: f64::NAN,
                 tov: f64::NAN,
                 mov: f64::NAN,
+                protrusion: f64::NAN,
             };
         };
         let (cur, budget_cut) = finish::polish(&mut self.ctx, cur);

@@ -6,7 +6,7 @@ use super::Context;
 use crate::fitting::Fit;
 use crate::metrics::{outside_from_cells, Cell, Outside};
 use crate::partition::Partition;
-use crate::refine::Figures;
+use crate::refine::{Figures, Tolerances};
 use crate::{BoundingVolume, Step, StepKind};
 
 /// A partition with its volumes and figures.
@@ -19,17 +19,22 @@ pub(crate) struct State {
     pub tov: f64,
     pub mov: f64,
     pub ov: Vec<f64>,
+    /// Each part's own protrusion (see [`crate::metrics::protrusion`]); their largest is the
+    /// union's.
+    pub pr: Vec<f64>,
+    pub protrusion: f64,
 }
 
 impl State {
     /// Fit (or fetch from the cache) every part's output volume, and measure.
     pub fn evaluate(ctx: &mut Context, part: Partition) -> Self {
         let fits = ctx.fit_all(&part);
-        Self::measure(part, fits)
+        let pr = ctx.fitter.protrusions(&ctx.solid, &fits);
+        Self::measure(part, fits, pr)
     }
 
-    /// `part` with the volumes `fits`, measured.
-    pub fn measure(part: Partition, fits: Vec<Arc<Fit>>) -> Self {
+    /// `part` with the volumes `fits` of protrusions `pr`, measured.
+    pub fn measure(part: Partition, fits: Vec<Arc<Fit>>, pr: Vec<f64>) -> Self {
         let counts = part.counts();
         let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume).collect();
         let cells: Vec<&[Cell]> = fits.iter().map(|f| f.outside.as_slice()).collect();
@@ -42,6 +47,8 @@ impl State {
             tov: o.tov,
             mov: o.mov,
             ov: o.ov,
+            protrusion: pr.iter().copied().fold(0.0, f64::max),
+            pr,
         }
     }
 
@@ -56,11 +63,13 @@ impl State {
         }
     }
 
-    /// The figures the tolerances judge.
-    pub fn figures(&self) -> Figures {
+    /// The figures the tolerances `tol` judge.
+    pub fn figures(&self, tol: &Tolerances) -> Figures {
         Figures {
             tov: self.tov,
             mov: self.mov,
+            protrusion: self.protrusion,
+            over: tol.over(&self.pr),
         }
     }
 
@@ -72,6 +81,7 @@ impl State {
             f: self.f,
             tov: self.tov,
             mov: self.mov,
+            protrusion: self.protrusion,
         }
     }
 }

@@ -20,6 +20,21 @@ pub fn work_budget(solid: &Solid) -> u64 {
     WORK_PER_SAMPLE * g.len() as u64 + WORK_PER_CELL * (g.dims[0] * g.dims[1] * g.dims[2]) as u64
 }
 
+/// Nodes and triangles of the surface's tree one volume's protrusion may visit: on ordinary
+/// meshes a volume needs a few tens of thousands; a hostile mesh of huge overlapping triangles
+/// would make each of its ~200 queries visit them all.
+pub const DISTANCE_PER_FIT: u64 = 4_000_000;
+
+/// The run's bound on the protrusions' searches, per sample. Beyond it they are taken as the
+/// distance to the nearest point of the part instead: an upper bound (see
+/// [`crate::metrics::protrusion_capped`]), so no tolerance is ever met by mistake.
+pub const DISTANCE_PER_SAMPLE: u64 = 2_500;
+
+/// The bound on the protrusions' searches for `solid`.
+pub fn distance_budget(solid: &Solid) -> u64 {
+    DISTANCE_PER_SAMPLE * solid.len() as u64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -73,6 +73,7 @@ mod tests {
             f: 0.0,
             tov,
             mov: 0.0,
+            protrusion: 0.0,
         }
     }
 

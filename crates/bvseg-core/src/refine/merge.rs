@@ -17,11 +17,14 @@ use crate::pipeline::{Context, State};
 /// Candidate merges fitted at a time: each fit holds its outside cells until it is judged.
 const MERGE_CHUNK: usize = 16;
 
-/// The figures after merging parts `a < b`.
+/// TOV and MOV after merging parts `a < b` (the protrusion is measured only for the options
+/// that could win, see [`best`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MergeOption {
-    /// TOV and MOV of the partition with the two parts merged.
-    pub after: Figures,
+    /// TOV of the partition with the two parts merged.
+    pub tov: f64,
+    /// MOV of the partition with the two parts merged.
+    pub mov: f64,
     /// The parts.
     pub a: usize,
     /// See `a`.
@@ -101,44 +104,59 @@ pub fn options(ctx: &mut Context, cur: &State, pairs: &[(u32, u32)]) -> (Vec<Mer
                 .filter(|&i| i != a && i != b)
                 .map(|i| cur.ov[i])
                 .fold(ov, f64::max);
-            out.push(MergeOption {
-                after: Figures { tov, mov },
-                a,
-                b,
-            });
+            out.push(MergeOption { tov, mov, a, b });
         }
     }
     (out, false)
 }
 
-/// The merge that lowers TOV most below `cur`'s, keeping the tolerances if `cur` meets them;
-/// ties go to the first pair.
-pub fn best(options: &[MergeOption], cur: Figures, tol: Tolerances) -> Option<(usize, usize)> {
+/// The merge that lowers TOV most below `cur`'s, keeping the tolerances if `cur` meets them
+/// and never raising the protrusion past the larger of `cur`'s and its tolerance; ties go to
+/// the first pair. `protrusion(a, b)` measures the protrusion after a merge: it is asked only
+/// for the options in the order they would win, until one passes.
+pub fn best(
+    options: &[MergeOption],
+    cur: Figures,
+    tol: Tolerances,
+    protrusion: impl FnMut(usize, usize) -> f64,
+) -> Option<(usize, usize)> {
     let met = tol.met(cur);
-    options
+    let mut order: Vec<&MergeOption> = options
         .iter()
-        .filter(|o| o.after.tov < cur.tov && (!met || tol.met(o.after)))
-        .min_by(|x, y| {
-            x.after
-                .tov
-                .total_cmp(&y.after.tov)
-                .then((x.a, x.b).cmp(&(y.a, y.b)))
-        })
-        .map(|o| (o.a, o.b))
+        .filter(|o| o.tov < cur.tov && (!met || (o.tov < tol.tov && o.mov < tol.mov_bound())))
+        .collect();
+    order.sort_by(|x, y| x.tov.total_cmp(&y.tov).then((x.a, x.b).cmp(&(y.a, y.b))));
+    first_within(&order, cur, tol, protrusion)
 }
 
 /// Of the merges of part `worst` with a neighbour, the one that lowers MOV most below
-/// `cur_mov` and keeps TOV in tolerance; ties go to the first pair.
-pub fn relieving(options: &[MergeOption], cur_mov: f64, tol: Tolerances) -> Option<(usize, usize)> {
-    options
+/// `cur_mov` and keeps TOV in tolerance (and the protrusion as in [`best`]); ties go to the
+/// first pair.
+pub fn relieving(
+    options: &[MergeOption],
+    cur: Figures,
+    tol: Tolerances,
+    protrusion: impl FnMut(usize, usize) -> f64,
+) -> Option<(usize, usize)> {
+    let mut order: Vec<&MergeOption> = options
         .iter()
-        .filter(|o| o.after.tov < tol.tov && o.after.mov < cur_mov)
-        .min_by(|x, y| {
-            x.after
-                .mov
-                .total_cmp(&y.after.mov)
-                .then((x.a, x.b).cmp(&(y.a, y.b)))
-        })
+        .filter(|o| o.tov < tol.tov && o.mov < cur.mov)
+        .collect();
+    order.sort_by(|x, y| x.mov.total_cmp(&y.mov).then((x.a, x.b).cmp(&(y.a, y.b))));
+    first_within(&order, cur, tol, protrusion)
+}
+
+/// The first of `order` whose protrusion stays within the larger of `cur`'s and its tolerance.
+fn first_within(
+    order: &[&MergeOption],
+    cur: Figures,
+    tol: Tolerances,
+    mut protrusion: impl FnMut(usize, usize) -> f64,
+) -> Option<(usize, usize)> {
+    let bound = cur.protrusion.max(tol.protrusion);
+    order
+        .iter()
+        .find(|o| protrusion(o.a, o.b) <= bound)
         .map(|o| (o.a, o.b))
 }
 
@@ -152,54 +170,83 @@ mod tests {
     use super::*;
 
     fn opt(tov: f64, mov: f64, a: usize, b: usize) -> MergeOption {
-        MergeOption {
-            after: Figures { tov, mov },
-            a,
-            b,
+        MergeOption { tov, mov, a, b }
+    }
+
+    fn fig(tov: f64, mov: f64, protrusion: f64) -> Figures {
+        Figures {
+            tov,
+            mov,
+            protrusion,
+            over: 0.0,
         }
     }
 
-    const TOL: Tolerances = Tolerances { tov: 0.3, mov: 0.5 };
+    const TOL: Tolerances = Tolerances {
+        tov: 0.3,
+        mov: Some(0.5),
+        protrusion: 0.1,
+    };
 
     #[test]
     fn best_lowers_tov_most_and_keeps_met_tolerances() {
-        let cur_unmet = Figures {
-            tov: 0.35,
-            mov: 0.9,
-        };
+        let none = |_, _| 0.0;
+        let cur_unmet = fig(0.35, 0.9, 0.05);
         let options = [
             opt(0.34, 0.9, 0, 1),
             opt(0.33, 0.95, 2, 3),
             opt(0.36, 0.1, 1, 2),
         ];
-        assert_eq!(best(&options, cur_unmet, TOL), Some((2, 3)));
-        // Met before: a merge must keep both tolerances.
-        let cur_met = Figures {
-            tov: 0.25,
-            mov: 0.4,
-        };
+        assert_eq!(best(&options, cur_unmet, TOL, none), Some((2, 3)));
+        // Met before: a merge must keep every tolerance.
+        let cur_met = fig(0.25, 0.4, 0.05);
         let options = [
             opt(0.2, 0.6, 0, 1),
             opt(0.24, 0.45, 1, 2),
             opt(0.26, 0.1, 0, 2),
         ];
-        assert_eq!(best(&options, cur_met, TOL), Some((1, 2)));
+        assert_eq!(best(&options, cur_met, TOL, none), Some((1, 2)));
         // Nothing lowers TOV: no merge.
-        assert_eq!(best(&[opt(0.25, 0.1, 0, 1)], cur_met, TOL), None);
+        assert_eq!(best(&[opt(0.25, 0.1, 0, 1)], cur_met, TOL, none), None);
         // Ties go to the first pair.
         let options = [opt(0.3, 0.9, 2, 3), opt(0.3, 0.9, 0, 4)];
-        assert_eq!(best(&options, cur_unmet, TOL), Some((0, 4)));
+        assert_eq!(best(&options, cur_unmet, TOL, none), Some((0, 4)));
+    }
+
+    #[test]
+    fn best_asks_for_the_protrusion_in_winning_order_until_one_passes() {
+        let options = [
+            opt(0.2, 0.1, 0, 1),
+            opt(0.22, 0.1, 1, 2),
+            opt(0.21, 0.1, 2, 3),
+        ];
+        let cur = fig(0.25, 0.4, 0.05);
+        let mut asked = Vec::new();
+        let got = best(&options, cur, TOL, |a, b| {
+            asked.push((a, b));
+            if a == 0 {
+                0.2 // beyond the tolerance: this merge would not keep it
+            } else {
+                0.08
+            }
+        });
+        assert_eq!(got, Some((2, 3)));
+        assert_eq!(asked, vec![(0, 1), (2, 3)]);
     }
 
     #[test]
     fn relieving_lowers_mov_within_the_tov_tolerance() {
+        let none = |_, _| 0.0;
         let options = [
             opt(0.29, 0.7, 0, 3),
             opt(0.31, 0.2, 1, 3),
             opt(0.2, 0.6, 3, 4),
         ];
-        assert_eq!(relieving(&options, 0.9, TOL), Some((3, 4)));
-        assert_eq!(relieving(&options, 0.6, TOL), None);
+        assert_eq!(
+            relieving(&options, fig(0.2, 0.9, 0.0), TOL, none),
+            Some((3, 4))
+        );
+        assert_eq!(relieving(&options, fig(0.2, 0.6, 0.0), TOL, none), None);
     }
 
     #[test]

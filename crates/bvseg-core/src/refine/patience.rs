@@ -1,7 +1,7 @@
-//! When more parts stop helping: once only MOV is out of tolerance, refinement stops when
-//! MOV has not improved for [`MOV_PATIENCE`] steps. With the whole surface enclosed, a part at
-//! a pointed tip keeps a large relative outside volume whatever k; more parts would only add
-//! cost.
+//! When more parts stop helping: with the optional MOV tolerance, once only MOV is out of
+//! tolerance, refinement stops when MOV has not improved for [`MOV_PATIENCE`] steps. With the
+//! whole surface enclosed, a part at a pointed tip keeps a large relative outside volume
+//! whatever k; more parts would only add cost.
 
 /// Refinement steps without a better MOV (while only MOV is out of tolerance) after which
 /// refinement stops.

@@ -1,12 +1,12 @@
 //! Which part to split, and whether the split stays (paper section 5.2).
 //!
-//! While TOV is out of tolerance, the part that adds the most outside volume is split (the
-//! paper's largest OV favours small parts, whose split barely moves TOV); once only MOV is,
-//! the part with the largest OV, as in the paper. A split that does not improve the figure out
-//! of tolerance is undone and the next part tried, up to [`SPLIT_TRIES`]; if every try fails
-//! the first is kept while TOV is out of tolerance (so that refinement always progresses), and
-//! refinement ends when only MOV was (no split helps it without breaking TOV).
-use super::{Figures, Tolerances};
+//! The figure out of tolerance decides ([`Aim`]): while TOV is, the part that adds the most
+//! outside volume is split (the paper's largest OV favours small parts, whose split barely
+//! moves TOV); once TOV is met and the protrusion is not, the part that protrudes most; with
+//! the optional MOV tolerance, the part with the largest OV, as in the paper. A split that does
+//! not improve that figure is undone and the next part tried, up to [`SPLIT_TRIES`]; if every
+//! try fails, [`keeps_first_anyway`] decides whether refinement goes on from the first.
+use super::{Aim, Figures, Tolerances};
 use crate::initialization::split;
 use crate::optimization::optimize;
 use crate::partition::{Partition, Solid};
@@ -21,24 +21,46 @@ pub const SPLIT_TRIES: usize = 2;
 /// polish that follows makes those moves at a fraction of the cost.
 pub const LOCAL_SWEEPS: usize = 10;
 
-/// The parts to try splitting, best first (at most [`SPLIT_TRIES`]): by outside volume
-/// (`ov[i]` times the part's samples `sizes[i]`) while TOV is out of tolerance, by OV once only
-/// MOV is; ties go to the lower index.
-pub fn candidates(ov: &[f64], sizes: &[f64], tov_bad: bool) -> Vec<usize> {
-    let weight = |i: usize| if tov_bad { ov[i] * sizes[i] } else { ov[i] };
+/// The parts to try splitting for `aim`, best first (at most [`SPLIT_TRIES`]): by outside
+/// volume (`ov[i]` times the part's samples `sizes[i]`) for TOV, by protrusion `pr[i]` for the
+/// protrusion, by OV for MOV; ties go to the lower index.
+pub fn candidates(aim: Aim, ov: &[f64], sizes: &[f64], pr: &[f64]) -> Vec<usize> {
+    let weight = |i: usize| match aim {
+        Aim::Tov => ov[i] * sizes[i],
+        Aim::Protrusion => pr[i],
+        Aim::Mov => ov[i],
+    };
     let mut order: Vec<usize> = (0..ov.len()).collect();
     order.sort_by(|&a, &b| weight(b).total_cmp(&weight(a)).then(a.cmp(&b)));
     order.truncate(SPLIT_TRIES);
     order
 }
 
-/// Whether a split that gave `cand` from `cur` stays: it must improve the figure that is out
-/// of tolerance and, when that is MOV, keep TOV in tolerance.
-pub fn keeps(cur: Figures, cand: Figures, tol: Tolerances) -> bool {
-    if tol.tov_bad(cur) {
-        cand.tov < cur.tov
-    } else {
-        cand.mov < cur.mov && cand.tov < tol.tov
+/// Whether a split for `aim` that gave `cand` from `cur` stays: it must improve the figure
+/// out of tolerance (for the protrusion: the sum over the parts beyond the tolerance, the
+/// largest not rising) and, past TOV, keep TOV in tolerance.
+pub fn keeps(aim: Aim, cur: Figures, cand: Figures, tol: Tolerances) -> bool {
+    match aim {
+        Aim::Tov => cand.tov < cur.tov,
+        Aim::Protrusion => {
+            cand.tov < tol.tov && cand.protrusion <= cur.protrusion && cand.over < cur.over
+        }
+        Aim::Mov => {
+            cand.mov < cur.mov
+                && cand.tov < tol.tov
+                && cand.protrusion <= cur.protrusion.max(tol.protrusion)
+        }
+    }
+}
+
+/// When every try failed: whether to keep the first anyway. For TOV always (the paper's
+/// choice, so that refinement progresses); for the protrusion when it keeps TOV in tolerance
+/// and the protrusion no higher (a later split may then fix it); for MOV never.
+pub fn keeps_first_anyway(aim: Aim, cur: Figures, first: Figures, tol: Tolerances) -> bool {
+    match aim {
+        Aim::Tov => true,
+        Aim::Protrusion => first.tov < tol.tov && first.protrusion <= cur.protrusion,
+        Aim::Mov => false,
     }
 }
 
@@ -87,26 +109,88 @@ mod tests {
     use glam::DVec3;
 
     #[test]
-    fn candidates_by_outside_volume_then_by_ov() {
-        // Part 0: small with a large OV; part 2: large with a moderate one.
+    fn candidates_by_outside_volume_protrusion_or_ov() {
+        // Part 0: small with a large OV; part 2: large with a moderate one; part 1 protrudes.
         let ov = [2.0, 0.1, 0.5, 0.5];
         let sizes = [10.0, 100.0, 100.0, 100.0];
-        assert_eq!(candidates(&ov, &sizes, true), vec![2, 3]);
-        assert_eq!(candidates(&ov, &sizes, false), vec![0, 2]);
-        assert_eq!(candidates(&[1.0], &[5.0], true), vec![0]);
+        let pr = [0.1, 0.4, 0.2, 0.2];
+        assert_eq!(candidates(Aim::Tov, &ov, &sizes, &pr), vec![2, 3]);
+        assert_eq!(candidates(Aim::Protrusion, &ov, &sizes, &pr), vec![1, 2]);
+        assert_eq!(candidates(Aim::Mov, &ov, &sizes, &pr), vec![0, 2]);
+        assert_eq!(candidates(Aim::Tov, &[1.0], &[5.0], &[0.0]), vec![0]);
     }
 
     #[test]
     fn keeps_what_improves_the_figure_out_of_tolerance() {
-        let tol = Tolerances { tov: 0.3, mov: 0.5 };
-        let f = |tov, mov| Figures { tov, mov };
+        let tol = Tolerances {
+            tov: 0.3,
+            mov: Some(0.5),
+            protrusion: 0.1,
+        };
+        let f = |tov, mov, protrusion, over| Figures {
+            tov,
+            mov,
+            protrusion,
+            over,
+        };
         // TOV out of tolerance: only TOV counts.
-        assert!(keeps(f(0.4, 0.9), f(0.39, 2.0), tol));
-        assert!(!keeps(f(0.4, 0.9), f(0.4, 0.1), tol));
+        assert!(keeps(
+            Aim::Tov,
+            f(0.4, 0.9, 1.0, 1.0),
+            f(0.39, 2.0, 2.0, 2.0),
+            tol
+        ));
+        assert!(!keeps(
+            Aim::Tov,
+            f(0.4, 0.9, 0.0, 0.0),
+            f(0.4, 0.1, 0.0, 0.0),
+            tol
+        ));
+        // The protrusion: less beyond the tolerance in all, the largest not higher, TOV kept.
+        let cur = f(0.2, 0.9, 0.3, 0.35);
+        assert!(keeps(Aim::Protrusion, cur, f(0.25, 0.9, 0.3, 0.2), tol));
+        assert!(!keeps(Aim::Protrusion, cur, f(0.31, 0.9, 0.1, 0.0), tol));
+        assert!(!keeps(Aim::Protrusion, cur, f(0.2, 0.9, 0.31, 0.21), tol));
+        assert!(!keeps(Aim::Protrusion, cur, f(0.2, 0.9, 0.3, 0.35), tol));
         // Only MOV out: MOV must drop and TOV stay in tolerance.
-        assert!(keeps(f(0.2, 0.9), f(0.25, 0.8), tol));
-        assert!(!keeps(f(0.2, 0.9), f(0.31, 0.6), tol));
-        assert!(!keeps(f(0.2, 0.9), f(0.1, 0.9), tol));
+        assert!(keeps(
+            Aim::Mov,
+            f(0.2, 0.9, 0.0, 0.0),
+            f(0.25, 0.8, 0.05, 0.0),
+            tol
+        ));
+        assert!(!keeps(
+            Aim::Mov,
+            f(0.2, 0.9, 0.0, 0.0),
+            f(0.31, 0.6, 0.0, 0.0),
+            tol
+        ));
+        assert!(!keeps(
+            Aim::Mov,
+            f(0.2, 0.9, 0.0, 0.0),
+            f(0.1, 0.9, 0.0, 0.0),
+            tol
+        ));
+        // After failed tries.
+        assert!(keeps_first_anyway(
+            Aim::Tov,
+            cur,
+            f(0.5, 9.0, 9.0, 9.0),
+            tol
+        ));
+        assert!(keeps_first_anyway(
+            Aim::Protrusion,
+            cur,
+            f(0.2, 0.9, 0.3, 0.4),
+            tol
+        ));
+        assert!(!keeps_first_anyway(
+            Aim::Protrusion,
+            cur,
+            f(0.2, 0.9, 0.31, 0.3),
+            tol
+        ));
+        assert!(!keeps_first_anyway(Aim::Mov, cur, cur, tol));
     }
 
     #[test]

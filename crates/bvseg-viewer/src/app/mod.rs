@@ -29,8 +29,8 @@ pub struct Settings {
     pub k: usize,
     /// Tolerance on TOV (sigma_G).
     pub tov: f64,
-    /// Tolerance on MOV (sigma_L).
-    pub mov: f64,
+    /// Tolerance on the protrusion, as a fraction of the box diagonal.
+    pub max_protrusion: f64,
     /// Largest k of the tolerance loop.
     pub max_k: usize,
     /// Target number of interior samples.
@@ -47,7 +47,7 @@ impl Default for Settings {
             fixed_k: false,
             k: 8,
             tov: p.tov,
-            mov: p.mov,
+            max_protrusion: p.max_protrusion,
             max_k: p.max_k,
             samples: p.samples,
             seed: p.seed,
@@ -64,7 +64,7 @@ impl Settings {
             bounding: self.bounding,
             k: self.fixed_k.then_some(self.k),
             tov: self.tov,
-            mov: self.mov,
+            max_protrusion: self.max_protrusion,
             max_k: self.max_k,
             ..Params::default()
         }

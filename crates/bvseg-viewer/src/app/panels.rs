@@ -215,10 +215,10 @@ impl ViewerApp {
                     );
                     labelled(
                         ui,
-                        "σL (MOV)",
-                        egui::DragValue::new(&mut s.mov)
-                            .speed(0.01)
-                            .range(0.0..=10.0),
+                        "Protrusion (× diagonal)",
+                        egui::DragValue::new(&mut s.max_protrusion)
+                            .speed(0.001)
+                            .range(0.001..=1.0),
                     );
                     labelled(
                         ui,
@@ -287,14 +287,17 @@ impl ViewerApp {
     fn history(&mut self, ui: &mut egui::Ui) {
         ui.heading("Refinement");
         let Some(session) = &self.session else {
-            ui.label(RichText::new("TOV and MOV against k appear here during a run.").weak());
+            ui.label(
+                RichText::new("TOV and the protrusion against k appear here during a run.").weak(),
+            );
             return;
         };
         let history: Vec<_> = session.snapshots().iter().map(|s| s.step).collect();
         let p = session.params();
-        let tol = p.k.is_none().then_some((p.tov, p.mov));
+        let tol = p.k.is_none().then_some((p.tov, p.max_protrusion));
         let shown = self.shown_step();
-        if let Some(i) = crate::plot::show(ui, &history, tol, shown) {
+        let diagonal = session.diagonal();
+        if let Some(i) = crate::plot::show(ui, &history, tol, diagonal, shown) {
             self.history_pos = Some(i);
         }
         let n = history.len();
@@ -330,8 +333,9 @@ impl ViewerApp {
             s.params()
                 .k
                 .is_none()
-                .then_some((s.params().tov, s.params().mov))
+                .then_some((s.params().tov, s.params().max_protrusion))
         });
+        let diagonal = self.session.as_ref().map_or(1.0, |s| s.diagonal());
         egui::Grid::new("stats")
             .num_columns(2)
             .striped(true)
@@ -372,7 +376,11 @@ impl ViewerApp {
                         None => format!("{v:.4}"),
                     };
                     row("TOV", mark(st.tov, tol.map(|t| t.0)));
-                    row("MOV", mark(st.mov, tol.map(|t| t.1)));
+                    row(
+                        "Protrusion",
+                        mark(st.protrusion / diagonal, tol.map(|t| t.1)) + " × diagonal",
+                    );
+                    row("MOV", mark(st.mov, None));
                     if st.kind == StepKind::Backtrack {
                         row("", "rejected split (view: kept state)".into());
                     }

@@ -1,0 +1,315 @@
+//! The protrusion: how far the union of the volumes reaches beyond the surface, as the
+//! one-way Hausdorff distance from the union's boundary to the mesh surface (paper section
+//! 5.4 names the Hausdorff distance as an application's error measure; the collider
+//! literature compares this one). Unlike the relative outside volume it goes to zero as parts
+//! get smaller, at pointed tips too, so a tolerance on it can always be met.
+//!
+//! The distance to the surface has no local maximum outside the solid (moving away from the
+//! nearest surface point increases it), so over a volume it peaks on the volume's boundary,
+//! and the largest distance of the union's boundary is the largest, over the volumes, of the
+//! distance of each volume's boundary outside the solid: a volume's own figure can be cached
+//! with its fit. The boundary is sampled (a Fibonacci lattice on the ellipsoid, a grid on the
+//! box's faces, corners included) and the best samples refined by a pattern search, so the
+//! peak is found to a small fraction of the sample spacing.
+use glam::DVec3;
+
+use super::surface::SurfaceDistance;
+use crate::sampling::{Grid, NONE};
+use crate::volume::{BoundingVolume, Shape};
+
+/// Points of the Fibonacci lattice on an ellipsoid.
+const ELLIPSOID_SAMPLES: usize = 160;
+
+/// Grid points per face edge on a box (corners and edges included).
+const BOX_GRID: usize = 6;
+
+/// Best samples refined by the pattern search.
+const REFINED: usize = 3;
+
+/// Halvings of the pattern search's step.
+const HALVINGS: usize = 10;
+
+/// A point of a volume's boundary, in its local coordinates (`|t| = 1` for an ellipsoid,
+/// `max |t_j| = 1` for a box).
+type Local = DVec3;
+
+/// The largest distance to the surface of the points of `v`'s boundary outside the solid
+/// (and, when `others` is not empty, outside every volume of `others`: the part of the
+/// union's boundary that `v` makes); 0 when there is none. (The run uses
+/// [`protrusion_capped`], which bounds the search's work.)
+#[cfg(test)]
+pub fn protrusion(
+    v: &BoundingVolume,
+    surface: &SurfaceDistance,
+    grid: &Grid,
+    others: &[BoundingVolume],
+) -> f64 {
+    protrusion_by(v, grid, others, |p| Some(surface.distance(p))).unwrap_or(0.0)
+}
+
+/// [`protrusion`] within a bound on the search's work: each fit may visit `cap` nodes and
+/// triangles of the surface's tree (a hostile mesh of huge overlapping triangles makes every
+/// query visit them all). Beyond it, an upper bound instead: the distance to the nearest of
+/// `points`, which lie in the solid (a segment from a point outside to a point inside meets
+/// the surface). Returns the figure and the work done.
+pub fn protrusion_capped(
+    v: &BoundingVolume,
+    surface: &SurfaceDistance,
+    grid: &Grid,
+    others: &[BoundingVolume],
+    points: &[DVec3],
+    cap: u64,
+) -> (f64, u64) {
+    let spent = std::cell::Cell::new(0u64);
+    // The distance is 1-Lipschitz: the last point's distance plus the step to this one bounds
+    // it, and lets the search skip most of the tree (the samples and the pattern search move
+    // in small steps).
+    let last = std::cell::Cell::new(None::<(DVec3, f64)>);
+    let exact = protrusion_by(v, grid, others, |p| {
+        let bound = last
+            .get()
+            .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
+        let d = surface.distance_within(p, bound, &spent, cap)?;
+        last.set(Some((p, d)));
+        Some(d)
+    });
+    let value = exact.unwrap_or_else(|| protrusion_bound(v, grid, others, points));
+    (value, spent.get())
+}
+
+/// An upper bound of [`protrusion`]: the distance to the nearest of `points` (points of the
+/// solid) in place of the distance to the surface.
+pub fn protrusion_bound(
+    v: &BoundingVolume,
+    grid: &Grid,
+    others: &[BoundingVolume],
+    points: &[DVec3],
+) -> f64 {
+    let nearest = |p: DVec3| {
+        points
+            .iter()
+            .map(|&q| (q - p).length_squared())
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    };
+    protrusion_by(v, grid, others, |p| Some(nearest(p)))
+        .unwrap_or(0.0)
+        .min(f64::MAX)
+}
+
+/// [`protrusion`] with the distance `dist`; `None` as soon as `dist` gives up.
+fn protrusion_by(
+    v: &BoundingVolume,
+    grid: &Grid,
+    others: &[BoundingVolume],
+    dist: impl Fn(DVec3) -> Option<f64>,
+) -> Option<f64> {
+    let world = |t: Local| v.center + v.axes * (t * v.radii);
+    // Only points that count: on the union's boundary and outside the solid.
+    let counts = |t: Local| {
+        let p = world(t);
+        let [i, j, k] = grid.cell_of(p);
+        grid.sample_at(i, j, k) == NONE && others.iter().all(|o| o.gauge(p) >= 1.0 - 1e-7)
+    };
+    let gave_up = std::cell::Cell::new(false);
+    let value = |t: Local| {
+        if !counts(t) || gave_up.get() {
+            return f64::NEG_INFINITY;
+        }
+        dist(world(t)).unwrap_or_else(|| {
+            gave_up.set(true);
+            f64::NEG_INFINITY
+        })
+    };
+    let (samples, step) = boundary_samples(v.shape);
+    let mut scored: Vec<(f64, usize)> = samples
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| (value(t), i))
+        .filter(|(d, _)| d.is_finite())
+        .collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut best = scored.first().map_or(0.0, |s| s.0);
+    for &(d, i) in scored.iter().take(REFINED) {
+        best = best.max(refine(v.shape, samples[i], d, step, &value));
+    }
+    (!gave_up.get()).then_some(best)
+}
+
+/// The sample points of a boundary of `shape` in local coordinates, and their spacing there.
+fn boundary_samples(shape: Shape) -> (Vec<Local>, f64) {
+    match shape {
+        Shape::Ellipsoid => {
+            let n = ELLIPSOID_SAMPLES;
+            let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+            let pts = (0..n)
+                .map(|i| {
+                    let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let (s, c) = crate::math::sin_cos(golden * i as f64);
+                    DVec3::new(r * c, r * s, z)
+                })
+                .collect();
+            (pts, (4.0 * std::f64::consts::PI / n as f64).sqrt())
+        }
+        Shape::Obb => {
+            let m = BOX_GRID;
+            let at = |i: usize| -1.0 + 2.0 * i as f64 / (m - 1) as f64;
+            let mut pts = Vec::with_capacity(6 * m * m);
+            for axis in 0..3 {
+                for sign in [-1.0, 1.0] {
+                    for a in 0..m {
+                        for b in 0..m {
+                            let mut t = [0.0; 3];
+                            t[axis] = sign;
+                            t[(axis + 1) % 3] = at(a);
+                            t[(axis + 2) % 3] = at(b);
+                            pts.push(DVec3::from_array(t));
+                        }
+                    }
+                }
+            }
+            (pts, 2.0 / (m - 1) as f64)
+        }
+    }
+}
+
+/// Pattern search on the boundary from `t` (value `d`) with initial step `step`: moves along
+/// the two tangent directions while they increase `value`, halving the step otherwise.
+fn refine(
+    shape: Shape,
+    mut t: Local,
+    mut d: f64,
+    mut step: f64,
+    value: &impl Fn(Local) -> f64,
+) -> f64 {
+    for _ in 0..HALVINGS {
+        let mut moved = true;
+        while moved {
+            moved = false;
+            let (e1, e2) = tangents(shape, t);
+            for dir in [e1, -e1, e2, -e2] {
+                let cand = project(shape, t + dir * step);
+                let dc = value(cand);
+                if dc > d {
+                    (t, d, moved) = (cand, dc, true);
+                    break;
+                }
+            }
+        }
+        step *= 0.5;
+    }
+    d
+}
+
+/// Two directions along the boundary at `t`.
+fn tangents(shape: Shape, t: Local) -> (DVec3, DVec3) {
+    match shape {
+        Shape::Ellipsoid => {
+            let a = if t.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+            let e1 = t.cross(a).normalize_or_zero();
+            (e1, t.cross(e1).normalize_or_zero())
+        }
+        Shape::Obb => {
+            // The face's two free axes.
+            let a = t.abs();
+            let axis = if a.x >= a.y && a.x >= a.z {
+                0
+            } else if a.y >= a.z {
+                1
+            } else {
+                2
+            };
+            let unit =
+                |i: usize| DVec3::from_array(std::array::from_fn(|j| f64::from(u8::from(i == j))));
+            (unit((axis + 1) % 3), unit((axis + 2) % 3))
+        }
+    }
+}
+
+/// `t` moved back onto the boundary.
+fn project(shape: Shape, t: Local) -> Local {
+    match shape {
+        Shape::Ellipsoid => t.normalize_or_zero(),
+        Shape::Obb => {
+            let c = t.clamp(DVec3::splat(-1.0), DVec3::splat(1.0));
+            let m = c.abs().max_element();
+            if m <= 0.0 {
+                return DVec3::X;
+            }
+            // Push the largest coordinate back onto its face.
+            let a = c.abs();
+            let mut out = c;
+            if a.x >= a.y && a.x >= a.z {
+                out.x = c.x.signum();
+            } else if a.y >= a.z {
+                out.y = c.y.signum();
+            } else {
+                out.z = c.z.signum();
+            }
+            out
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes;
+    use glam::DMat3;
+
+    fn cube_grid() -> Grid {
+        Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), 0.1, |p| {
+            p.abs().max_element() <= 1.0
+        })
+    }
+
+    #[test]
+    fn cube_in_its_circumscribed_ball_and_in_a_larger_box() {
+        let mesh = shapes::cuboid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY);
+        let surface = SurfaceDistance::new(&mesh);
+        let grid = cube_grid();
+        // The ball of radius sqrt 3 touches the corners; its farthest points lie over the
+        // face centres, sqrt 3 - 1 from the surface.
+        let ball = BoundingVolume {
+            shape: Shape::Ellipsoid,
+            center: DVec3::ZERO,
+            axes: DMat3::IDENTITY,
+            radii: DVec3::splat(3f64.sqrt()),
+        };
+        let p = protrusion(&ball, &surface, &grid, &[]);
+        assert!((p - (3f64.sqrt() - 1.0)).abs() < 1e-3, "{p}");
+        // A box 1.2 times the cube: its corners are 0.2 sqrt 3 from the cube's corners.
+        let b = BoundingVolume {
+            shape: Shape::Obb,
+            radii: DVec3::splat(1.2),
+            ..ball
+        };
+        let p = protrusion(&b, &surface, &grid, &[]);
+        assert!((p - 0.2 * 3f64.sqrt()).abs() < 1e-9, "{p}");
+        // Covered by the larger box, the ball adds nothing to the union's boundary.
+        let big = BoundingVolume {
+            radii: DVec3::splat(2.0),
+            ..b
+        };
+        assert_eq!(protrusion(&ball, &surface, &grid, &[big]), 0.0);
+    }
+
+    #[test]
+    fn an_elongated_ellipsoid_peaks_at_its_tips() {
+        // A sphere of radius 1 in an ellipsoid of semi-axes (3, 1.2, 1.2): the tips are 2 out.
+        let mesh = shapes::ellipsoid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY, 48);
+        let surface = SurfaceDistance::new(&mesh);
+        let grid = Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), 0.1, |p| {
+            p.length() <= 1.0
+        });
+        let v = BoundingVolume {
+            shape: Shape::Ellipsoid,
+            center: DVec3::ZERO,
+            axes: DMat3::from_rotation_z(0.3),
+            radii: DVec3::new(3.0, 1.2, 1.2),
+        };
+        let p = protrusion(&v, &surface, &grid, &[]);
+        assert!((p - 2.0).abs() < 2e-3, "{p}");
+    }
+}

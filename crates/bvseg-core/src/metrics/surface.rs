@@ -1,0 +1,289 @@
+//! Exact distances from points to the mesh surface, through a bounding-volume hierarchy of
+//! its triangles: what the protrusion ([`super::protrusion`]) is measured with.
+//!
+//! A tree rather than a grid of triangle buckets: a hostile mesh of a few huge triangles would
+//! put each of them in every bucket. The build is `O(n log n)` whatever the triangles' sizes,
+//! and deterministic (ties between centroids are broken by index).
+use glam::DVec3;
+
+use crate::Mesh;
+
+/// Triangles per leaf.
+const LEAF: usize = 4;
+
+#[derive(Debug, Clone)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    /// A leaf (`count > 0`) holds the triangles `start..start + count`. An inner node's left
+    /// child is the node after it, its right child node `start`.
+    start: u32,
+    count: u32,
+}
+
+/// The mesh's triangles in a tree, for nearest-point queries.
+#[derive(Debug, Clone)]
+pub struct SurfaceDistance {
+    tris: Vec<[DVec3; 3]>,
+    nodes: Vec<Node>,
+}
+
+impl SurfaceDistance {
+    /// The tree of `mesh`'s triangles.
+    pub fn new(mesh: &Mesh) -> Self {
+        // A face repeated (as hostile files do, thousands of times) is one face to the
+        // distance, and would make every query near it visit each copy.
+        let mut faces: Vec<[u32; 3]> = mesh
+            .triangles()
+            .iter()
+            .map(|t| {
+                let mut t = *t;
+                t.sort_unstable();
+                t
+            })
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        let v = mesh.vertices();
+        let mut tris: Vec<[DVec3; 3]> = faces.iter().map(|t| t.map(|i| v[i as usize])).collect();
+        crate::work::add(tris.len());
+        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
+        if !tris.is_empty() {
+            let n = tris.len();
+            build(&mut tris, 0, n, &mut nodes);
+        }
+        Self { tris, nodes }
+    }
+
+    /// Distance from `p` to the nearest point of the surface (infinite for an empty mesh).
+    pub fn distance(&self, p: DVec3) -> f64 {
+        self.distance_squared(p).sqrt()
+    }
+
+    /// [`SurfaceDistance::distance`], adding the nodes and triangles it visits to `spent`;
+    /// `None` (without searching) once `spent` exceeds `cap`. `bound` is an upper bound of
+    /// the distance (infinite if none is known): with a good one, the search prunes most of
+    /// the tree, and the result is exact either way (if no triangle is nearer than the bound,
+    /// the distance is the bound).
+    pub fn distance_within(
+        &self,
+        p: DVec3,
+        bound: f64,
+        spent: &std::cell::Cell<u64>,
+        cap: u64,
+    ) -> Option<f64> {
+        if spent.get() > cap {
+            return None;
+        }
+        let (d, visited) = self.search(p, bound * bound);
+        spent.set(spent.get() + visited as u64);
+        Some(d.sqrt())
+    }
+
+    /// Squared [`SurfaceDistance::distance`].
+    pub fn distance_squared(&self, p: DVec3) -> f64 {
+        self.search(p, f64::INFINITY).0
+    }
+
+    /// The squared distance (at most `bound`) and the number of nodes and triangles visited.
+    fn search(&self, p: DVec3, bound: f64) -> (f64, usize) {
+        let mut best = bound;
+        if self.nodes.is_empty() {
+            return (best, 0);
+        }
+        let mut stack: Vec<(u32, f64)> = vec![(0, box_distance_squared(&self.nodes[0], p))];
+        let mut visited = 0usize;
+        while let Some((i, d)) = stack.pop() {
+            if d >= best {
+                continue;
+            }
+            visited += 1;
+            let node = &self.nodes[i as usize];
+            if node.count > 0 {
+                let (s, c) = (node.start as usize, node.count as usize);
+                visited += c;
+                for t in &self.tris[s..s + c] {
+                    best = best.min((closest_on_triangle(p, t) - p).length_squared());
+                }
+            } else {
+                let (l, r) = (i + 1, node.start);
+                let dl = box_distance_squared(&self.nodes[l as usize], p);
+                let dr = box_distance_squared(&self.nodes[r as usize], p);
+                // The nearer child is searched first (pushed last).
+                if dl <= dr {
+                    stack.push((r, dr));
+                    stack.push((l, dl));
+                } else {
+                    stack.push((l, dl));
+                    stack.push((r, dr));
+                }
+            }
+        }
+        crate::work::add(visited);
+        (best, visited)
+    }
+}
+
+/// Builds the subtree of `tris[a..b]` (reordered in place); returns its node's index.
+fn build(tris: &mut [[DVec3; 3]], a: usize, b: usize, nodes: &mut Vec<Node>) -> u32 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let (mut clo, mut chi) = (lo, hi);
+    for t in &tris[a..b] {
+        for &v in t {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        let c = centroid(t);
+        clo = clo.min(c);
+        chi = chi.max(c);
+    }
+    let me = nodes.len() as u32;
+    nodes.push(Node {
+        lo,
+        hi,
+        start: a as u32,
+        count: (b - a) as u32,
+    });
+    let ext = chi - clo;
+    if b - a <= LEAF || ext.max_element() <= 0.0 {
+        return me;
+    }
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mid = a + (b - a) / 2;
+    tris[a..b].select_nth_unstable_by(mid - a, |x, y| {
+        centroid(x)[axis].total_cmp(&centroid(y)[axis])
+    });
+    build(tris, a, mid, nodes);
+    let right = build(tris, mid, b, nodes);
+    let node = &mut nodes[me as usize];
+    node.start = right;
+    node.count = 0;
+    me
+}
+
+fn centroid(t: &[DVec3; 3]) -> DVec3 {
+    (t[0] + t[1] + t[2]) / 3.0
+}
+
+fn box_distance_squared(n: &Node, p: DVec3) -> f64 {
+    let d = (n.lo - p).max(p - n.hi).max(DVec3::ZERO);
+    d.length_squared()
+}
+
+/// The point of triangle `t` nearest `p` (Ericson, *Real-Time Collision Detection*, 5.1.5).
+fn closest_on_triangle(p: DVec3, [a, b, c]: &[DVec3; 3]) -> DVec3 {
+    let (a, b, c) = (*a, *b, *c);
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return a + ab * v;
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return a + ac * w;
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return b + (c - b) * w;
+    }
+    let denom = va + vb + vc;
+    if denom.abs() < f64::MIN_POSITIVE || !denom.is_finite() {
+        // A degenerate triangle: the nearest of its edges' points.
+        let seg = |u: DVec3, v: DVec3| {
+            let d = v - u;
+            let t = if d.length_squared() > 0.0 {
+                ((p - u).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            u + d * t
+        };
+        return [seg(a, b), seg(b, c), seg(c, a)]
+            .into_iter()
+            .min_by(|x, y| {
+                (*x - p)
+                    .length_squared()
+                    .total_cmp(&(*y - p).length_squared())
+            })
+            .unwrap_or(a);
+    }
+    let v = vb / denom;
+    let w = vc / denom;
+    a + ab * v + ac * w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use crate::shapes;
+    use glam::DMat3;
+
+    fn brute(mesh: &Mesh, p: DVec3) -> f64 {
+        (0..mesh.triangles().len())
+            .map(|t| (closest_on_triangle(p, &mesh.corners(t)) - p).length_squared())
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    }
+
+    #[test]
+    fn tree_agrees_with_brute_force() {
+        let mesh = shapes::union(&[
+            shapes::ellipsoid(DVec3::ZERO, DVec3::new(2.0, 1.0, 0.5), DMat3::IDENTITY, 24),
+            shapes::cuboid(
+                DVec3::new(1.5, 0.0, 0.0),
+                DVec3::splat(0.4),
+                DMat3::IDENTITY,
+            ),
+        ]);
+        let tree = SurfaceDistance::new(&mesh);
+        let mut rng = Rng::new(7);
+        for _ in 0..500 {
+            let p = DVec3::new(
+                rng.next_f64() * 6.0 - 3.0,
+                rng.next_f64() * 4.0 - 2.0,
+                rng.next_f64() * 4.0 - 2.0,
+            );
+            // Equal up to rounding: the tree stores each face's corners in another order.
+            let (t, b) = (tree.distance(p), brute(&mesh, p));
+            assert!((t - b).abs() <= 1e-12 * b.max(1.0), "{p}: {t} vs {b}");
+        }
+    }
+
+    #[test]
+    fn distances_to_a_cube_face_edge_and_corner() {
+        let mesh = shapes::cuboid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY);
+        let tree = SurfaceDistance::new(&mesh);
+        let close = |p: DVec3, d: f64| (tree.distance(p) - d).abs() < 1e-12;
+        assert!(close(DVec3::new(3.0, 0.2, -0.1), 2.0));
+        assert!(close(DVec3::new(2.0, 2.0, 0.0), 2f64.sqrt()));
+        assert!(close(DVec3::splat(2.0), 3f64.sqrt()));
+        assert!(
+            close(DVec3::new(0.0, 0.0, 0.5), 0.5),
+            "inside: to the nearest face"
+        );
+    }
+}
