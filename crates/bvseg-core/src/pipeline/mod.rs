@@ -27,11 +27,11 @@ pub(crate) use state::State;
 
 use crate::initialization::cvt;
 use crate::optimization::optimize;
-use crate::parallel::{join, threads};
 use crate::partition::{Partition, Solid};
 use crate::refine::checkpoint::{Checkpoints, CHECKPOINT_PASSES};
 use crate::refine::patience::MovPatience;
-use crate::refine::{merge, split, Aim, Tolerances};
+use crate::refine::split::{Split, SplitStep};
+use crate::refine::{merge, Aim, Tolerances};
 use crate::sampling::Grid;
 use crate::tightening::tighten;
 use crate::{BoundingVolume, Cancel, Error, Mesh, Params, Segmentation, Step, StepKind};
@@ -66,16 +66,10 @@ enum Phase {
 pub struct Segmenter {
     ctx: Context,
     tol: Tolerances,
-    /// What the current split step aims to improve.
-    aim: Aim,
     phase: Phase,
     state: Option<State>,
-    /// Parts left to try in the current split step (the next last), and the first try's
-    /// result.
-    tries: Vec<usize>,
-    first_try: Option<State>,
-    /// The next try's partition, when it was prepared alongside the current one.
-    pending: Option<(usize, Partition)>,
+    /// The split step in progress, if any.
+    split: SplitStep,
     refine_steps: usize,
     checkpoints: Checkpoints,
     patience: MovPatience,
@@ -119,12 +113,9 @@ impl Segmenter {
         Ok(Self {
             tol: ctx.tolerances(),
             ctx,
-            aim: Aim::Tov,
             phase: Phase::Start,
             state: None,
-            tries: Vec::new(),
-            first_try: None,
-            pending: None,
+            split: SplitStep::default(),
             refine_steps: 0,
             checkpoints: Checkpoints::default(),
             patience: MovPatience::default(),
@@ -243,7 +234,7 @@ impl Segmenter {
         if k >= self.ctx.params.max_k || k >= self.ctx.solid.len() / 2 {
             return self.end_refinement();
         }
-        if self.tries.is_empty() && self.first_try.is_none() {
+        if !self.split.in_progress() {
             self.refine_steps += 1;
             if self.refine_steps > 4 * self.ctx.params.max_k {
                 // A guard against splits and merges undoing each other forever.
@@ -266,70 +257,17 @@ impl Segmenter {
                 }
             }
             let cur = self.state.as_ref()?;
-            self.aim = aim;
-            self.tries = split::candidates(aim, &cur.ov, &cur.part.counts(), &cur.pr);
-            self.tries.reverse();
+            self.split.begin(aim, cur);
         }
-        self.split_next()
-    }
-
-    /// Try the next candidate split of the current step; keep it if it helps. When every try
-    /// failed, keep the first if [`split::keeps_first_anyway`] says so, or end refinement.
-    fn split_next(&mut self) -> Option<Step> {
-        let aim = self.aim;
-        while let Some(i) = self.tries.pop() {
-            let cur = self.state.as_ref()?;
-            let part = match self.pending.take() {
-                Some((j, p)) if j == i => Some(p),
-                _ => {
-                    // With a second thread, the next try is re-optimised alongside this one:
-                    // the optimisation is serial, and the first try is often undone.
-                    let next = self.tries.last().copied().filter(|_| threads() > 1);
-                    let (solid, sweeps) = (&self.ctx.solid, self.ctx.params.max_sweeps);
-                    let (this, ahead) = join(
-                        || split::try_split(solid, &cur.part, i, sweeps),
-                        || {
-                            next.and_then(|j| {
-                                split::try_split(solid, &cur.part, j, sweeps).map(|p| (j, p))
-                            })
-                        },
-                    );
-                    self.pending = ahead;
-                    this
-                }
-            };
-            let Some(part) = part else {
-                continue;
-            };
-            let cand = State::evaluate(&mut self.ctx, part);
-            let cur = self.state.as_ref()?;
-            let tol = self.tol;
-            if split::keeps(aim, cur.figures(&tol), cand.figures(&tol), tol) {
-                self.tries.clear();
-                self.first_try = None;
-                return Some(self.accept(StepKind::Split, cand));
-            }
-            let step = self.record(cand.step(StepKind::Backtrack));
-            if self.first_try.is_none() {
-                self.first_try = Some(cand);
-            }
-            if !self.tries.is_empty() {
-                return Some(step);
-            }
-        }
-        let first = self.first_try.take();
-        let tol = self.tol;
-        let keep = match (&self.state, &first) {
-            (Some(cur), Some(f)) => {
-                split::keeps_first_anyway(aim, cur.figures(&tol), f.figures(&tol), tol)
-            }
-            _ => false,
-        };
-        match first {
-            Some(s) if keep => Some(self.accept(StepKind::Split, s)),
-            Some(_) => self.end_refinement(),
-            None => {
-                // No part could be split at all.
+        let cur = self.state.as_ref()?;
+        match self
+            .split
+            .next(&mut self.ctx, cur, self.tol, &mut self.history)
+        {
+            Split::Kept(s) => Some(self.accept(StepKind::Split, s)),
+            Split::Backtracked(step) => Some(step),
+            Split::Ended => self.end_refinement(),
+            Split::Impossible => {
                 self.phase = Phase::Final;
                 None
             }
@@ -348,16 +286,9 @@ impl Segmenter {
     /// lowers MOV most, keeping TOV in tolerance, if one does.
     fn merge_worst(&mut self) -> Option<Step> {
         let cur = self.state.as_ref()?;
-        let worst = merge::worst(&cur.ov)? as u32;
-        let pairs: Vec<(u32, u32)> = merge::pairs(&self.ctx, cur)
-            .into_iter()
-            .filter(|&(a, b)| a == worst || b == worst)
-            .collect();
-        let figures = cur.figures(&self.tol);
-        let options = self.options(&pairs);
-        let (a, b) = merge::relieving(&options, figures, self.tol, self.protrusion_after())?;
-        let s = self.merged(a, b)?;
-        Some(self.accept(StepKind::Merge, s))
+        let (merged, cut) = merge::relieving_merge(&mut self.ctx, cur, self.tol);
+        self.budget_hit |= cut && !self.ctx.cancel.is_cancelled();
+        Some(self.accept(StepKind::Merge, merged?))
     }
 
     /// One merge of the merge phase; `None` when no merge helps (the phase has moved on).
@@ -365,57 +296,18 @@ impl Segmenter {
         if self.out_of_work() {
             return None;
         }
-        match self.best_merge() {
+        let merged = self.state.as_ref().and_then(|cur| {
+            let (merged, cut) = merge::best_merge(&mut self.ctx, cur, self.tol);
+            self.budget_hit |= cut && !self.ctx.cancel.is_cancelled();
+            merged
+        });
+        match merged {
             Some(s) => Some(self.accept(StepKind::Merge, s)),
             None => {
                 self.phase = Phase::Final;
                 None
             }
         }
-    }
-
-    /// The merge that lowers TOV most (keeping the tolerances if they are met), measured.
-    fn best_merge(&mut self) -> Option<State> {
-        let cur = self.state.as_ref()?;
-        let (pairs, figures) = (merge::pairs(&self.ctx, cur), cur.figures(&self.tol));
-        let options = self.options(&pairs);
-        let (a, b) = merge::best(&options, figures, self.tol, self.protrusion_after())?;
-        self.merged(a, b)
-    }
-
-    /// The figures after each merge of `pairs` (see [`merge::options`]).
-    fn options(&mut self, pairs: &[(u32, u32)]) -> Vec<merge::MergeOption> {
-        let Some(cur) = self.state.as_ref() else {
-            return Vec::new();
-        };
-        let (options, cut) = merge::options(&mut self.ctx, cur, pairs);
-        self.budget_hit |= cut && !self.ctx.cancel.is_cancelled();
-        options
-    }
-
-    /// The protrusion of the current state with parts `a` and `b` merged: the merged part's
-    /// fit (fitted by [`Segmenter::options`]) and the other parts'.
-    fn protrusion_after(&self) -> impl FnMut(usize, usize) -> f64 + '_ {
-        move |a, b| {
-            let Some(cur) = self.state.as_ref() else {
-                return f64::INFINITY;
-            };
-            let m = cur.part.parts[a].merged(&cur.part.parts[b]);
-            let Some(fit) = self.ctx.fitter.get(&m) else {
-                return f64::INFINITY;
-            };
-            let merged = self.ctx.fitter.protrusions(&self.ctx.solid, &[fit])[0];
-            (0..cur.pr.len())
-                .filter(|&i| i != a && i != b)
-                .map(|i| cur.pr[i])
-                .fold(merged, f64::max)
-        }
-    }
-
-    /// The current partition with parts `a` and `b` merged, measured.
-    fn merged(&mut self, a: usize, b: usize) -> Option<State> {
-        let part = self.state.as_ref()?.part.merged(a, b);
-        Some(State::evaluate(&mut self.ctx, part))
     }
 
     /// The final step (see [`finish`]).
@@ -467,7 +359,7 @@ impl Segmenter {
     /// Make `s` the current state, recording the step that led to it.
     fn accept(&mut self, kind: StepKind, s: State) -> Step {
         // A try prepared ahead was split from the state being replaced.
-        self.pending = None;
+        self.split.forget_pending();
         let step = self.record(s.step(kind));
         self.state = Some(s);
         step

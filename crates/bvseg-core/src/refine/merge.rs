@@ -160,6 +160,52 @@ fn first_within(
         .map(|o| (o.a, o.b))
 }
 
+/// The merge phase's merge for `cur` (see [`best`]), measured; the flag says whether the
+/// run's work bound cut the candidates short.
+pub fn best_merge(ctx: &mut Context, cur: &State, tol: Tolerances) -> (Option<State>, bool) {
+    let pairs = pairs(ctx, cur);
+    let (options, cut) = options(ctx, cur, &pairs);
+    let choice = best(&options, cur.figures(&tol), tol, protrusion_after(ctx, cur));
+    (choice.map(|(a, b)| merged(ctx, cur, a, b)), cut)
+}
+
+/// The merge of `cur`'s worst part (the largest OV) with a neighbour that [`relieving`]
+/// picks, measured; the flag as in [`best_merge`].
+pub fn relieving_merge(ctx: &mut Context, cur: &State, tol: Tolerances) -> (Option<State>, bool) {
+    let Some(w) = worst(&cur.ov) else {
+        return (None, false);
+    };
+    let w = w as u32;
+    let pairs: Vec<(u32, u32)> = pairs(ctx, cur)
+        .into_iter()
+        .filter(|&(a, b)| a == w || b == w)
+        .collect();
+    let (options, cut) = options(ctx, cur, &pairs);
+    let choice = relieving(&options, cur.figures(&tol), tol, protrusion_after(ctx, cur));
+    (choice.map(|(a, b)| merged(ctx, cur, a, b)), cut)
+}
+
+/// The protrusion of `cur` with parts `a` and `b` merged: the merged part's fit (fitted by
+/// [`options`]) and the other parts'.
+fn protrusion_after<'a>(ctx: &'a Context, cur: &'a State) -> impl FnMut(usize, usize) -> f64 + 'a {
+    move |a, b| {
+        let m = cur.part.parts[a].merged(&cur.part.parts[b]);
+        let Some(fit) = ctx.fitter.get(&m) else {
+            return f64::INFINITY;
+        };
+        let merged = ctx.fitter.protrusions(&ctx.solid, &[fit])[0];
+        (0..cur.pr.len())
+            .filter(|&i| i != a && i != b)
+            .map(|i| cur.pr[i])
+            .fold(merged, f64::max)
+    }
+}
+
+/// `cur` with parts `a` and `b` merged, measured.
+fn merged(ctx: &mut Context, cur: &State, a: usize, b: usize) -> State {
+    State::evaluate(ctx, cur.part.merged(a, b))
+}
+
 /// The part with the largest OV (the last on ties), if any.
 pub fn worst(ov: &[f64]) -> Option<usize> {
     (0..ov.len()).max_by(|&a, &b| ov[a].total_cmp(&ov[b]))

@@ -9,7 +9,10 @@
 use super::{Aim, Figures, Tolerances};
 use crate::initialization::split;
 use crate::optimization::optimize;
+use crate::parallel::{join, threads};
 use crate::partition::{Partition, Solid};
+use crate::pipeline::{Context, State};
+use crate::{Step, StepKind};
 
 /// How many parts a refinement step tries to split before keeping the first split anyway.
 /// More tries rarely found a better split on the shared meshes, and each costs a local
@@ -61,6 +64,106 @@ pub fn keeps_first_anyway(aim: Aim, cur: Figures, first: Figures, tol: Tolerance
         Aim::Tov => true,
         Aim::Protrusion => first.tov < tol.tov && first.protrusion <= cur.protrusion,
         Aim::Mov => false,
+    }
+}
+
+/// One split step in progress: what it aims at, the parts left to try (the next last), the
+/// first try's result, and the next try, when it was prepared alongside the current one.
+#[derive(Debug, Default)]
+pub struct SplitStep {
+    aim: Option<Aim>,
+    tries: Vec<usize>,
+    first: Option<State>,
+    pending: Option<(usize, Partition)>,
+}
+
+/// What a call of [`SplitStep::next`] came to.
+#[derive(Debug)]
+pub enum Split {
+    /// A split to keep (it helped, or it is the first try, kept anyway).
+    Kept(State),
+    /// A try did not help and was recorded as a backtrack; more tries are left.
+    Backtracked(Step),
+    /// No try helped and none is worth keeping: refinement is over.
+    Ended,
+    /// No part could be split at all.
+    Impossible,
+}
+
+impl SplitStep {
+    /// Whether a step has tries left or is deciding on its first try.
+    pub fn in_progress(&self) -> bool {
+        !self.tries.is_empty() || self.first.is_some()
+    }
+
+    /// A new step on `cur`, for `aim`.
+    pub fn begin(&mut self, aim: Aim, cur: &State) {
+        self.aim = Some(aim);
+        self.tries = candidates(aim, &cur.ov, &cur.part.counts(), &cur.pr);
+        self.tries.reverse();
+        self.first = None;
+    }
+
+    /// The try prepared ahead was split from a state that is no longer current.
+    pub fn forget_pending(&mut self) {
+        self.pending = None;
+    }
+
+    /// Try the next candidate split of `cur`, and say what came of it; a rejected try is
+    /// recorded in `history` as a backtrack.
+    pub fn next(
+        &mut self,
+        ctx: &mut Context,
+        cur: &State,
+        tol: Tolerances,
+        history: &mut Vec<Step>,
+    ) -> Split {
+        let aim = self.aim.unwrap_or(Aim::Tov);
+        while let Some(i) = self.tries.pop() {
+            let part = match self.pending.take() {
+                Some((j, p)) if j == i => Some(p),
+                _ => {
+                    // With a second thread, the next try is re-optimised alongside this one:
+                    // the optimisation is serial, and the first try is often undone.
+                    let next = self.tries.last().copied().filter(|_| threads() > 1);
+                    let (solid, sweeps) = (&ctx.solid, ctx.params.max_sweeps);
+                    let (this, ahead) = join(
+                        || try_split(solid, &cur.part, i, sweeps),
+                        || {
+                            next.and_then(|j| {
+                                try_split(solid, &cur.part, j, sweeps).map(|p| (j, p))
+                            })
+                        },
+                    );
+                    self.pending = ahead;
+                    this
+                }
+            };
+            let Some(part) = part else {
+                continue;
+            };
+            let cand = State::evaluate(ctx, part);
+            if keeps(aim, cur.figures(&tol), cand.figures(&tol), tol) {
+                self.tries.clear();
+                self.first = None;
+                return Split::Kept(cand);
+            }
+            let step = cand.step(StepKind::Backtrack);
+            history.push(step);
+            if self.first.is_none() {
+                self.first = Some(cand);
+            }
+            if !self.tries.is_empty() {
+                return Split::Backtracked(step);
+            }
+        }
+        match self.first.take() {
+            Some(f) if keeps_first_anyway(aim, cur.figures(&tol), f.figures(&tol), tol) => {
+                Split::Kept(f)
+            }
+            Some(_) => Split::Ended,
+            None => Split::Impossible,
+        }
     }
 }
 
