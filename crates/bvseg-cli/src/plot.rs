@@ -21,9 +21,7 @@ pub fn svg(seg: &Segmentation, params: &Params, name: &str) -> String {
     // The protrusion is drawn as a fraction of the box diagonal.
     let diag = seg.metrics.diagonal.max(f64::MIN_POSITIVE);
     let rel = |st: &bvseg_core::Step| st.protrusion / diag;
-    let pr_tol = params
-        .max_protrusion_abs
-        .map_or(params.max_protrusion, |a| a / diag);
+    let pr_tol = params.protrusion_tolerance_rel(diag);
     let mut y_max = steps
         .iter()
         .map(|s| finite(s.tov).max(finite(rel(s))))

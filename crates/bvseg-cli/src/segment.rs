@@ -138,8 +138,8 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
 /// what would help.
 pub fn unmet_message(seg: &Segmentation, params: &Params) -> (String, String) {
     let m = &seg.metrics;
-    let parts: Vec<String> = seg
-        .unmet(params)
+    let unmet = seg.unmet(params);
+    let parts: Vec<String> = unmet
         .iter()
         .map(|&(name, value, tol)| match name {
             "tov" => format!("TOV {value:.3} vs {tol}"),
@@ -152,7 +152,7 @@ pub fn unmet_message(seg: &Segmentation, params: &Params) -> (String, String) {
         })
         .collect();
     let what = format!("tolerances not met at k = {} ({})", m.k, parts.join(", "));
-    let mov_only = seg.unmet(params).iter().all(|u| u.0 == "mov");
+    let mov_only = unmet.iter().all(|u| u.0 == "mov");
     let hint = if mov_only {
         "flat ends and pointed tips keep MOV up whatever k (docs/method.md, \"What MOV can \
          reach\"); raise --mov or leave it out"

@@ -193,11 +193,6 @@ impl Fitter {
         }
     }
 
-    /// The exact distances to the surface, for the final report.
-    pub fn surface(&self) -> &SurfaceDistance {
-        &self.surface
-    }
-
     /// Each fit's own protrusion: the largest distance to the surface of its boundary outside
     /// the solid (measured in parallel where not yet known, then kept with the fit). Exact
     /// while the run's bound on the searches lasts, an upper bound beyond it (see

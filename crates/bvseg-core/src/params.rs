@@ -126,6 +126,22 @@ pub const MAX_K: usize = 4096;
 const MIN_SAMPLES: usize = 100;
 
 impl Params {
+    /// The protrusion tolerance in mesh units, for a mesh whose bounding box has diagonal
+    /// `diagonal`: [`Params::max_protrusion_abs`], or [`Params::max_protrusion`] times the
+    /// diagonal.
+    #[must_use]
+    pub fn protrusion_tolerance(&self, diagonal: f64) -> f64 {
+        self.max_protrusion_abs
+            .unwrap_or(self.max_protrusion * diagonal)
+    }
+
+    /// The same tolerance as a fraction of the diagonal.
+    #[must_use]
+    pub fn protrusion_tolerance_rel(&self, diagonal: f64) -> f64 {
+        self.max_protrusion_abs
+            .map_or(self.max_protrusion, |a| a / diagonal)
+    }
+
     /// Check every parameter against its range.
     ///
     /// # Errors

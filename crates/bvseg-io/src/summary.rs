@@ -90,9 +90,7 @@ impl Tolerances {
     /// The tolerances `params` set for the run `seg`, `None` with a fixed k (which has none).
     pub fn of(params: &Params, seg: &Segmentation) -> Option<Self> {
         let d = seg.metrics.diagonal;
-        let protrusion = params
-            .max_protrusion_abs
-            .unwrap_or(params.max_protrusion * d);
+        let protrusion = params.protrusion_tolerance(d);
         params.k.is_none().then_some(Self {
             tov: params.tov,
             protrusion,

@@ -44,6 +44,8 @@ enum Stage {
 /// A run of the core on one mesh with one set of parameters.
 pub struct Session {
     mesh: Arc<Mesh>,
+    /// The mesh's bounding-box diagonal (asked for every frame by the plot).
+    diagonal: f64,
     params: Params,
     stage: Stage,
     samples: usize,
@@ -70,7 +72,9 @@ pub enum Progress {
 impl Session {
     /// A run that has not started; [`Session::advance`] does the work.
     pub fn new(mesh: Arc<Mesh>, params: Params) -> Self {
+        let (lo, hi) = mesh.bbox();
         Self {
+            diagonal: (hi - lo).length(),
             mesh,
             params,
             stage: Stage::Sampling,
@@ -246,8 +250,7 @@ impl Session {
 
     /// The diagonal of the mesh's bounding box (the protrusion is shown relative to it).
     pub fn diagonal(&self) -> f64 {
-        let (lo, hi) = self.mesh.bbox();
-        (hi - lo).length()
+        self.diagonal
     }
 
     /// Wall-clock time from the start to the end of the run, or so far.

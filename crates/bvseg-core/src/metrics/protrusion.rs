@@ -92,9 +92,7 @@ pub fn protrusion_bound(
             .fold(f64::INFINITY, f64::min)
             .sqrt()
     };
-    protrusion_by(v, grid, others, |p| Some(nearest(p)))
-        .unwrap_or(0.0)
-        .min(f64::MAX)
+    protrusion_by(v, grid, others, |p| Some(nearest(p))).unwrap_or(0.0)
 }
 
 /// [`protrusion`] with the distance `dist`; `None` as soon as `dist` gives up.

@@ -56,6 +56,7 @@ impl SurfaceDistance {
     }
 
     /// Distance from `p` to the nearest point of the surface (infinite for an empty mesh).
+    #[cfg(test)]
     pub fn distance(&self, p: DVec3) -> f64 {
         self.distance_squared(p).sqrt()
     }
@@ -81,6 +82,7 @@ impl SurfaceDistance {
     }
 
     /// Squared [`SurfaceDistance::distance`].
+    #[cfg(test)]
     pub fn distance_squared(&self, p: DVec3) -> f64 {
         self.search(p, f64::INFINITY).0
     }

@@ -60,9 +60,7 @@ impl Tolerances {
         Self {
             tov: params.tov,
             mov: params.mov,
-            protrusion: params
-                .max_protrusion_abs
-                .unwrap_or(params.max_protrusion * diagonal),
+            protrusion: params.protrusion_tolerance(diagonal),
         }
     }
 
