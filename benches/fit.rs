@@ -19,7 +19,7 @@ use bvseg::internals::Enclosure;
 use bvseg::internals::Grid;
 use bvseg::internals::Solid;
 use bvseg::internals::{Fitter, MVEE_TOL};
-use bvseg::{BoundingKind, Mesh};
+use bvseg::{Kinds, Mesh};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
 
@@ -79,7 +79,7 @@ fn bench(c: &mut Criterion) {
             pts,
             hv
         );
-        let fitter = Fitter::new(&cs.mesh, &cs.solid, BoundingKind::Ellipsoid);
+        let fitter = Fitter::new(&cs.mesh, &cs.solid, Kinds::ELLIPSOID);
 
         let mut g = c.benchmark_group(format!("fit/{}", cs.name));
         g.throughput(Throughput::Elements(n as u64));

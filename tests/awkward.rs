@@ -6,7 +6,7 @@
 #[path = "support/verify_input.rs"]
 mod verify_input;
 
-use bvseg::{segment, shapes, BoundingKind, Error, Mesh, ParamError, Params, Segmentation};
+use bvseg::{segment, shapes, Error, Kinds, Mesh, ParamError, Params, Segmentation};
 use bvseg_verify::{VerifyOptions, VerifyReport};
 use glam::{DMat3, DVec3};
 
@@ -58,11 +58,11 @@ fn scaled(m: &Mesh, s: f64) -> Mesh {
     Mesh::new(v, m.triangles().to_vec()).unwrap()
 }
 
-fn params(samples: usize, k: Option<usize>, bounding: BoundingKind) -> Params {
+fn params(samples: usize, k: Option<usize>, kinds: Kinds) -> Params {
     Params {
         samples,
         k,
-        bounding,
+        kinds,
         ..Params::default()
     }
 }
@@ -74,7 +74,7 @@ fn one_cell_thick_plate() {
     let mesh = shapes::cuboid(DVec3::ZERO, DVec3::new(2.0, 2.0, 0.5 * t), DMat3::IDENTITY);
     // Boxes fit a plate exactly; without the cell term the covariance would be singular
     // and the volumes NaN or flat.
-    let (seg, r) = run("plate obb", &mesh, &params(2000, None, BoundingKind::Obb));
+    let (seg, r) = run("plate obb", &mesh, &params(2000, None, Kinds::OBB));
     assert!(
         r.tov < 0.05,
         "plate obb: TOV {} with k = {}",
@@ -86,16 +86,12 @@ fn one_cell_thick_plate() {
     // are given to it, and no radius goes below half a cell, so a part holding one face and
     // the middle layer of cells is inflated about its centre: measured 0.50. The bound
     // leaves room for that, no more.
-    let (_, r) = run(
-        "plate obb k=4",
-        &mesh,
-        &params(2000, Some(4), BoundingKind::Obb),
-    );
+    let (_, r) = run("plate obb k=4", &mesh, &params(2000, Some(4), Kinds::OBB));
     assert!(r.tov < 0.75, "plate obb k=4: TOV {}", r.tov);
     let (_, r) = run(
         "plate ellipsoid",
         &mesh,
-        &params(2000, Some(4), BoundingKind::Ellipsoid),
+        &params(2000, Some(4), Kinds::ELLIPSOID),
     );
     // An ellipsoid around a square slab sticks out by at least pi sqrt(3)/2 - 1 = 0.72
     // in the best case (circumscribed); four of them should not do much worse.
@@ -106,11 +102,7 @@ fn one_cell_thick_plate() {
 fn needle() {
     // Aspect ratio 100, about three cells across at 3000 samples.
     let mesh = shapes::capsule(DVec3::ZERO, DVec3::new(10.0, 3.0, -2.0), 0.05, 16);
-    let (seg, r) = run(
-        "needle",
-        &mesh,
-        &params(3000, None, BoundingKind::Ellipsoid),
-    );
+    let (seg, r) = run("needle", &mesh, &params(3000, None, Kinds::ELLIPSOID));
     // Measured 0.94 (k = 45): a part a few cells across cannot be wrapped tightly by an
     // ellipsoid that must also hold the capsule's facets. A single ellipsoid would be 2.3.
     assert!(
@@ -124,11 +116,7 @@ fn needle() {
 #[test]
 fn torus_keeps_its_hole() {
     let mesh = shapes::torus(DVec3::ZERO, 2.0, 0.5, 48);
-    let (seg, r) = run(
-        "torus",
-        &mesh,
-        &params(4000, Some(8), BoundingKind::Ellipsoid),
-    );
+    let (seg, r) = run("torus", &mesh, &params(4000, Some(8), Kinds::ELLIPSOID));
     assert!(r.tov < 0.8, "torus: TOV {}", r.tov);
     // No volume covers the middle of the hole.
     assert!(
@@ -155,10 +143,10 @@ fn many_components_some_smaller_than_a_cell() {
     }
     let meshes: Vec<Mesh> = pieces.iter().map(|p| p.0.clone()).collect();
     let mesh = shapes::union(&meshes);
-    for kind in [BoundingKind::Ellipsoid, BoundingKind::Obb] {
+    for kind in [Kinds::ELLIPSOID, Kinds::OBB] {
         let (seg, r) = run("components", &mesh, &params(3000, None, kind));
         // Measured 0.067 (ellipsoids) and 0.655 (boxes: about ten per ball).
-        let bound = if kind == BoundingKind::Obb { 1.0 } else { 0.3 };
+        let bound = if kind == Kinds::OBB { 1.0 } else { 0.3 };
         assert!(r.tov < bound, "components {kind:?}: TOV {}", r.tov);
         // No volume swallows two pieces (they are at least 2.5 apart).
         for (i, p) in seg.parts.iter().enumerate() {
@@ -174,7 +162,7 @@ fn inward_facing_mesh_gives_the_same_result() {
         shapes::ellipsoid(DVec3::ZERO, DVec3::new(1.0, 0.6, 0.4), DMat3::IDENTITY, 24),
         shapes::capsule(DVec3::ZERO, DVec3::new(0.0, 2.0, 0.0), 0.3, 16),
     ]);
-    let p = params(2000, Some(3), BoundingKind::Mixed);
+    let p = params(2000, Some(3), Kinds::MIXED);
     let (a, ra) = run("outward", &m, &p);
     let (b, rb) = run("inward", &flipped(&m), &p);
     assert_eq!(bvseg::io::to_json_string(&a), bvseg::io::to_json_string(&b));
@@ -185,7 +173,7 @@ fn inward_facing_mesh_gives_the_same_result() {
 #[test]
 fn duplicated_and_self_intersecting_shells() {
     let e = shapes::ellipsoid(DVec3::ZERO, DVec3::new(1.0, 0.6, 0.4), DMat3::IDENTITY, 24);
-    let p = params(2000, Some(2), BoundingKind::Ellipsoid);
+    let p = params(2000, Some(2), Kinds::ELLIPSOID);
     let (a, _) = run("single", &e, &p);
     let (b, rb) = run("duplicated", &shapes::union(&[e.clone(), e.clone()]), &p);
     // A duplicated shell is the same solid: the same samples and parts. (The volumes may
@@ -200,11 +188,7 @@ fn duplicated_and_self_intersecting_shells() {
         shapes::cuboid(DVec3::ZERO, DVec3::new(2.0, 0.3, 0.3), rot),
         shapes::cuboid(DVec3::ZERO, DVec3::new(0.3, 0.3, 1.5), DMat3::IDENTITY),
     ]);
-    let (_, r) = run(
-        "crossing boxes",
-        &cross,
-        &params(3000, None, BoundingKind::Obb),
-    );
+    let (_, r) = run("crossing boxes", &cross, &params(3000, None, Kinds::OBB));
     // Every edge is matched, so the verifier (like bveval) takes vol(S) as the signed volume,
     // which counts the overlaps twice: this TOV is understated, and is compared loosely.
     assert!(r.tov < 0.4, "crossing boxes: TOV {}", r.tov);
@@ -223,7 +207,7 @@ fn small_holes() {
         .collect();
     assert!(t.len() < e.triangles().len());
     let holed = Mesh::new(e.vertices().to_vec(), t).unwrap();
-    let p = params(2000, Some(2), BoundingKind::Ellipsoid);
+    let p = params(2000, Some(2), Kinds::ELLIPSOID);
     let (a, _) = run("closed", &e, &p);
     let (b, r) = run("holes", &holed, &p);
     assert!(!r.closed);
@@ -244,7 +228,7 @@ fn tiny_and_huge_scales() {
             16,
         ),
     ]);
-    let p = params(2000, None, BoundingKind::Mixed);
+    let p = params(2000, None, Kinds::MIXED);
     let (_, r1) = run("unit", &base, &p);
     for s in [1e-6, 1e6] {
         let (seg, r) = run(&format!("scale {s}"), &scaled(&base, s), &p);
@@ -265,7 +249,7 @@ fn k_larger_than_the_samples_is_a_clear_error() {
     // `segment` calls first) with a one-line `InvalidParams` error; k up to that bound gives
     // exactly k parts.
     let m = shapes::cuboid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY);
-    let p = params(200, Some(200 / 8 + 1), BoundingKind::Ellipsoid);
+    let p = params(200, Some(200 / 8 + 1), Kinds::ELLIPSOID);
     match segment(&m, &p) {
         Err(Error::InvalidParams(e)) => {
             assert_eq!(
@@ -280,13 +264,13 @@ fn k_larger_than_the_samples_is_a_clear_error() {
         }
         other => panic!("expected InvalidParams, got {other:?}"),
     }
-    let p = params(200, Some(10_000), BoundingKind::Ellipsoid);
+    let p = params(200, Some(10_000), Kinds::ELLIPSOID);
     assert!(matches!(segment(&m, &p), Err(Error::InvalidParams(_))));
     let ball = shapes::ellipsoid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY, 32);
     let (seg, r) = run(
         "k = samples/8",
         &ball,
-        &params(200, Some(25), BoundingKind::Ellipsoid),
+        &params(200, Some(25), Kinds::ELLIPSOID),
     );
     assert_eq!(seg.parts.len(), 25);
     // Parts of about 8 samples each are coarse, but their union still hugs the ball.

@@ -5,7 +5,7 @@
 use std::fs;
 
 use bvseg::shapes::{capsule, ellipsoid, union};
-use bvseg::{segment, BoundingKind, Mesh, Params, Segmentation};
+use bvseg::{segment, Kinds, Mesh, Params, Segmentation};
 use glam::{DMat3, DMat4, DQuat, DVec3};
 
 /// A dumbbell whose vertices are multiples of 2^-10, so that f32 (STL, glTF) and decimal
@@ -112,11 +112,11 @@ fn write_glb(m: &Mesh, matrix: &DMat4, parent_translation: DVec3) -> Vec<u8> {
     out
 }
 
-fn params(kind: BoundingKind) -> Params {
+fn params(kind: Kinds) -> Params {
     Params {
         samples: 6000,
         k: Some(2),
-        bounding: kind,
+        kinds: kind,
         ..Params::default()
     }
 }
@@ -221,7 +221,7 @@ fn obj_stl_and_transformed_glb_give_the_same_volumes() {
         "GLB is not the transformed OBJ"
     );
 
-    for kind in [BoundingKind::Ellipsoid, BoundingKind::Obb] {
+    for kind in [Kinds::ELLIPSOID, Kinds::OBB] {
         let p = params(kind);
         let (so, ss, sg) = (
             segment(&obj, &p).unwrap(),

@@ -4,7 +4,7 @@
 use bvseg::internals::Grid;
 use bvseg::internals::{is_connected, solid_components};
 use bvseg::shapes::{capsule, ellipsoid, union};
-use bvseg::{segment, BoundingKind, Mesh, Params, Segmentation};
+use bvseg::{segment, Kinds, Mesh, Params, Segmentation};
 use glam::{DMat3, DVec3};
 
 fn bundled(name: &str) -> Mesh {
@@ -115,15 +115,20 @@ fn dumbbell_splits_at_its_neck() {
 #[test]
 fn parts_are_connected_cover_every_sample_and_enclose_the_mesh() {
     let mesh = bundled("bunny.obj");
-    for bounding in [
-        BoundingKind::Ellipsoid,
-        BoundingKind::Obb,
-        BoundingKind::Mixed,
+    for kinds in [
+        Kinds::ELLIPSOID,
+        Kinds::OBB,
+        Kinds::MIXED,
+        Kinds::SPHERE,
+        Kinds::CAPSULE,
+        Kinds::CYLINDER,
+        Kinds::HULL,
+        Kinds::PRIMITIVES,
     ] {
         let params = Params {
             k: Some(12),
             samples: 8_000,
-            bounding,
+            kinds,
             ..Params::default()
         };
         let seg = segment(&mesh, &params).unwrap();
@@ -140,7 +145,9 @@ fn parts_are_connected_cover_every_sample_and_enclose_the_mesh() {
         assert!(seg.metrics.f >= 1.0);
         assert_encloses(&mesh, &seg, &grid);
         let cov = interior_coverage(&mesh, &seg, 60_000);
-        assert!(cov >= 0.9999, "{bounding:?}: interior coverage {cov}");
+        assert!(cov >= 0.9999, "{kinds}: interior coverage {cov}");
+        // Each part's volume is of a kind of the set.
+        assert!(seg.parts.iter().all(|p| kinds.contains(p.volume.shape)));
     }
 }
 
@@ -237,7 +244,7 @@ fn a_margin_keeps_the_f64_original_of_an_f32_mesh_enclosed() {
     let params = Params {
         samples: 3_000,
         k: Some(6),
-        bounding: BoundingKind::Mixed,
+        kinds: Kinds::MIXED,
         ..Params::default()
     };
     let plain = segment(&mesh32, &params).expect("segments");

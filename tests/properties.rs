@@ -9,7 +9,7 @@
 mod verify_input;
 
 use bvseg::internals::{cvt, lloyd, mvee, polish, sym_eigen, Grid, Partition, Solid, NONE};
-use bvseg::{segment, shapes, BoundingKind, BoundingVolume, Mesh, Params, Segmentation, Shape};
+use bvseg::{segment, shapes, BoundingVolume, Kinds, Mesh, Params, Segmentation, Shape};
 use bvseg_verify::VerifyOptions;
 use glam::{DMat3, DVec3};
 use proptest::prelude::*;
@@ -147,12 +147,17 @@ fn flood(grid: &Grid, s: usize, mark: &mut [u32], id: u32, ok: impl Fn(usize) ->
     }
 }
 
-fn kind_of(i: u8) -> BoundingKind {
+fn kind_of(i: u8) -> Kinds {
     [
-        BoundingKind::Ellipsoid,
-        BoundingKind::Obb,
-        BoundingKind::Mixed,
-    ][i as usize % 3]
+        Kinds::ELLIPSOID,
+        Kinds::OBB,
+        Kinds::MIXED,
+        Kinds::SPHERE,
+        Kinds::CAPSULE,
+        Kinds::CYLINDER,
+        Kinds::HULL,
+        Kinds::PRIMITIVES,
+    ][i as usize % 8]
 }
 
 fn check_segmentation(
@@ -246,7 +251,7 @@ proptest! {
             samples: 1500,
             k,
             seed,
-            bounding: kind_of(kind),
+            kinds: kind_of(kind),
             max_k: 8,
             ..Params::default()
         };
@@ -267,7 +272,7 @@ proptest! {
             samples: 1200,
             k,
             seed,
-            bounding: kind_of(kind),
+            kinds: kind_of(kind),
             max_k: 6,
             ..Params::default()
         };
@@ -364,12 +369,12 @@ fn scaled_legendre(pts: &[DVec3], h: f64) -> BoundingVolume {
         cov += glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z) / n;
     }
     let (vals, axes) = sym_eigen(cov);
-    BoundingVolume {
-        shape: Shape::Ellipsoid,
-        center: c,
+    BoundingVolume::frame(
+        Shape::Ellipsoid,
+        c,
         axes,
-        radii: DVec3::new(vals.x.sqrt(), vals.y.sqrt(), vals.z.sqrt()),
-    }
+        DVec3::new(vals.x.sqrt(), vals.y.sqrt(), vals.z.sqrt()),
+    )
     .scaled_to_contain(pts.iter().copied())
 }
 
@@ -405,7 +410,7 @@ fn merge_keeps_parts_connected_regression() {
     let params = Params {
         samples: 1500,
         seed: 1764072409045963465,
-        bounding: BoundingKind::Obb,
+        kinds: Kinds::OBB,
         max_k: 8,
         ..Params::default()
     };

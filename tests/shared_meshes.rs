@@ -5,7 +5,7 @@
 // Tests and benchmarks state their expectations by panicking.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use bvseg::internals::Grid;
-use bvseg::{segment, BoundingKind, Params};
+use bvseg::{segment, Kinds, Params};
 use std::path::{Path, PathBuf};
 
 #[test]
@@ -40,15 +40,17 @@ fn check_folder(dir: &Path) -> usize {
         let mesh = bvseg::io::load(&path, &bvseg::io::LoadOptions::default())
             .expect("shared mesh loads")
             .mesh;
-        for bounding in [
-            BoundingKind::Ellipsoid,
-            BoundingKind::Obb,
-            BoundingKind::Mixed,
+        for kinds in [
+            Kinds::ELLIPSOID,
+            Kinds::OBB,
+            Kinds::MIXED,
+            Kinds::PRIMITIVES,
+            Kinds::HULL,
         ] {
             let params = Params {
                 samples: 4_000,
                 k: Some(8),
-                bounding,
+                kinds,
                 ..Params::default()
             };
             let seg = segment(&mesh, &params).expect("segments");
@@ -56,7 +58,7 @@ fn check_folder(dir: &Path) -> usize {
             for (t, &p) in seg.triangle_parts.iter().enumerate() {
                 let v = &seg.parts[p as usize].volume;
                 for c in mesh.corners(t) {
-                    assert!(v.contains(c), "{name:?} {bounding:?}: triangle {t} escapes");
+                    assert!(v.contains(c), "{name:?} {kinds}: triangle {t} escapes");
                 }
             }
             // Interior points of a finer, differently aligned lattice are all covered.
@@ -67,10 +69,7 @@ fn check_folder(dir: &Path) -> usize {
                 .filter(|&&p| !seg.parts.iter().any(|part| part.volume.contains(p)))
                 .count();
             let cov = 1.0 - missed as f64 / fine.len() as f64;
-            assert!(
-                cov >= 0.9999,
-                "{name:?} {bounding:?}: interior coverage {cov}"
-            );
+            assert!(cov >= 0.9999, "{name:?} {kinds}: interior coverage {cov}");
         }
     }
     count

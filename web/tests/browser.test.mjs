@@ -238,7 +238,8 @@ test('clicking the controls in the page runs with them', async () => {
     timeout: 60_000,
   });
   const click = (label) => clickWidget(page, label);
-  await click('Boxes');
+  // Boxes only: untick the other kinds of the default set.
+  for (const kind of ['Ellipsoids', 'Spheres', 'Capsules', 'Cylinders']) await click(kind);
   await click('Fixed k');
   assert.equal(await page.title(), 'bvseg', 'nothing ran yet');
   await click('Run');
@@ -335,7 +336,7 @@ for (const [name, bytes] of [['brick.obj', brickObj], ['brick.glb', brickGlb], [
     }
     await fc.setFiles(file);
     await page.waitForTimeout(500);
-    await click('Boxes');
+    for (const kind of ['Ellipsoids', 'Spheres', 'Capsules', 'Cylinders']) await click(kind);
     await click('Fixed k');
     await click('Run');
     await page.waitForFunction(

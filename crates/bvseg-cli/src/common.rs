@@ -3,9 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
-use bvseg_core::{BoundingKind, Cancel, Mesh, Params, Segmentation, Segmenter, Step};
+use bvseg_core::{Cancel, Kinds, Mesh, Params, Segmentation, Segmenter, Step, Target};
 use bvseg_io::{LoadOptions, LoadedMesh};
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use crate::progress::Progress;
 
@@ -66,9 +66,20 @@ pub struct ParamArgs {
     #[arg(long, value_name = "N", default_value_t = Params::default().max_k)]
     pub max_k: usize,
 
-    /// Bounding volume of each part (mixed: whichever of the two is smaller).
-    #[arg(long = "bv", value_enum, default_value_t = Bv::Ellipsoid)]
-    pub bv: Bv,
+    /// Kinds of volume a part may get, as a comma list of ellipsoid, obb (or box), sphere,
+    /// capsule, cylinder, hull; mixed = ellipsoid,obb. Each part gets the kind that adds the
+    /// least outside volume. Default: every primitive (no hull).
+    #[arg(long = "bv", value_name = "KINDS", value_parser = parse_kinds, default_value_t = Params::default().kinds)]
+    pub bv: Kinds,
+
+    /// The kinds an engine takes natively: mujoco, gltf, parry (rapier, avian), physx
+    /// (isaac) or usd; NAME-hull adds convex hulls (e.g. parry-hull).
+    #[arg(long, value_name = "NAME", value_parser = parse_target, conflicts_with = "bv")]
+    pub target: Option<Kinds>,
+
+    /// Most vertices of a hull volume (engines cap convex meshes; PhysX at 255).
+    #[arg(long, value_name = "N", default_value_t = Params::default().max_hull_vertices)]
+    pub max_hull_vertices: usize,
 
     /// Target number of interior samples.
     #[arg(long, value_name = "N", default_value_t = Params::default().samples)]
@@ -117,21 +128,21 @@ fn parse_timeout(s: &str) -> Result<f64, String> {
     }
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Bv {
-    Ellipsoid,
-    Obb,
-    Mixed,
+/// A `--bv` list.
+fn parse_kinds(s: &str) -> Result<Kinds, String> {
+    s.parse::<Kinds>().map_err(|e| e.to_string())
 }
 
-impl From<Bv> for BoundingKind {
-    fn from(bv: Bv) -> Self {
-        match bv {
-            Bv::Ellipsoid => BoundingKind::Ellipsoid,
-            Bv::Obb => BoundingKind::Obb,
-            Bv::Mixed => BoundingKind::Mixed,
-        }
-    }
+/// A `--target` name.
+fn parse_target(s: &str) -> Result<Kinds, String> {
+    Target::kinds_of(s).ok_or_else(|| {
+        let names: Vec<&str> = Target::ALL.iter().map(|t| t.as_str()).collect();
+        format!(
+            "unknown target {s:?}: expected one of {} (or rapier, avian, isaac), \
+             optionally with -hull",
+            names.join(", ")
+        )
+    })
 }
 
 impl ParamArgs {
@@ -147,7 +158,8 @@ impl ParamArgs {
         let params = Params {
             samples: self.samples,
             seed: self.seed,
-            bounding: self.bv.into(),
+            kinds: self.target.unwrap_or(self.bv),
+            max_hull_vertices: self.max_hull_vertices,
             k: self.k,
             tov: self.tov,
             mov: self.mov,

@@ -221,7 +221,7 @@ fn print_summary(
         loaded.mesh.triangles().len(),
         m.samples,
         m.k,
-        seg.kind.as_str(),
+        shape_counts(seg),
         m.f,
         m.tov,
         m.protrusion_rel,
@@ -229,6 +229,21 @@ fn print_summary(
         m.mov,
     );
     write_stdout(&text)
+}
+
+/// How many volumes of each shape, most first: `12 capsule, 10 ellipsoid`.
+fn shape_counts(seg: &bvseg_core::Segmentation) -> String {
+    let mut counts: Vec<(usize, bvseg_core::Shape)> = bvseg_core::Shape::ALL
+        .into_iter()
+        .map(|s| (seg.parts.iter().filter(|p| p.volume.shape == s).count(), s))
+        .filter(|c| c.0 > 0)
+        .collect();
+    counts.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
+    let parts: Vec<String> = counts
+        .iter()
+        .map(|(n, s)| format!("{n} {}", s.as_str()))
+        .collect();
+    parts.join(", ")
 }
 
 fn print_json(
@@ -266,9 +281,8 @@ pub fn write_stdout(text: &str) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::common::Bv;
     use crate::tests::parse_segment as parse;
-    use bvseg_core::BoundingKind;
+    use bvseg_core::{Kinds, Shape};
 
     #[test]
     fn defaults_come_from_the_core() {
@@ -279,7 +293,8 @@ mod tests {
             (p.tov, p.mov, p.max_k, p.samples, p.seed),
             (d.tov, d.mov, d.max_k, d.samples, d.seed)
         );
-        assert_eq!(BoundingKind::from(p.bv), d.bounding);
+        assert_eq!(p.params().unwrap().kinds, d.kinds);
+        assert_eq!(p.max_hull_vertices, d.max_hull_vertices);
         assert!(a.mesh.is_none() && p.k.is_none() && a.output.is_empty() && p.threads.is_none());
     }
 
@@ -323,14 +338,36 @@ mod tests {
         .unwrap();
         assert_eq!(a.mesh.as_deref(), Some(Path::new("m.obj")));
         let p = &a.params;
-        assert_eq!(p.bv, Bv::Mixed);
+        assert_eq!(p.bv, Kinds::MIXED);
         assert_eq!(p.threads, Some(3));
         assert!(p.no_merge && p.no_polish && a.quiet && p.strict && a.json);
         assert_eq!((p.samples, p.seed, p.max_k), (5000, 7, 9));
         assert_eq!(a.output.len(), 2);
         assert_eq!(a.input.object.as_deref(), Some("body"));
         assert!(parse(&["--threads", "0"]).is_err());
-        assert!(parse(&["--bv", "sphere"]).is_err());
+        assert!(parse(&["--bv", "torus"]).is_err());
+        let caps = parse(&["--bv", "obb,capsule"])
+            .unwrap()
+            .params
+            .params()
+            .unwrap();
+        assert_eq!(caps.kinds, Kinds::OBB.with(Shape::Capsule));
+        let parry = parse(&["--target", "parry"])
+            .unwrap()
+            .params
+            .params()
+            .unwrap();
+        assert!(!parry.kinds.contains(Shape::Ellipsoid) && !parry.kinds.contains(Shape::Hull));
+        let hull = parse(&["--target", "avian-hull", "--max-hull-vertices", "64"]).unwrap();
+        let hp = hull.params.params().unwrap();
+        assert!(hp.kinds.contains(Shape::Hull) && hp.max_hull_vertices == 64);
+        assert!(parse(&["--target", "unity"]).is_err());
+        assert!(parse(&["--target", "parry", "--bv", "sphere"]).is_err());
+        let few = parse(&["--max-hull-vertices", "3"])
+            .unwrap()
+            .params
+            .params();
+        assert!(few.unwrap_err().to_string().contains("max_hull_vertices"));
     }
 
     #[test]

@@ -43,7 +43,7 @@ fn parse(path: &Path) -> serde_json::Value {
 #[test]
 fn bundled_mesh_k2_writes_the_schema() {
     let dir = scratch("bundled_mesh_k2_writes_the_schema");
-    let o = segment(&dir, &["--k", "2", "-o", "out.json"]);
+    let o = segment(&dir, &["--k", "2", "--bv", "ellipsoid", "-o", "out.json"]);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(
@@ -259,12 +259,61 @@ fn bad_parameters_fail_cleanly() {
 }
 
 #[test]
+fn other_kinds_write_schema_2_with_their_fields() {
+    let dir = scratch("other_kinds_write_schema_2_with_their_fields");
+    let o = segment(&dir, &["--k", "4", "--bv", "capsule", "-o", "caps.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc = parse(&dir.join("caps.json"));
+    assert_eq!(doc["schema"], "bvseg.volumes/2");
+    assert_eq!(doc["kind"], "capsule");
+    assert_eq!(doc["kinds"], "capsule");
+    for v in doc["volumes"].as_array().unwrap() {
+        assert_eq!(v["shape"], "capsule");
+        for key in ["center", "axis", "half_length", "radius", "fraction"] {
+            assert!(v.get(key).is_some(), "{key} missing: {v}");
+        }
+        assert!(v.get("axes").is_none() && v.get("radii").is_none());
+    }
+    // An engine's set: no ellipsoid in a parry file; hulls on request, within the limit.
+    let o = segment(
+        &dir,
+        &[
+            "--k",
+            "6",
+            "--target",
+            "parry-hull",
+            "--max-hull-vertices",
+            "12",
+            "-o",
+            "p.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc = parse(&dir.join("p.json"));
+    for v in doc["volumes"].as_array().unwrap() {
+        assert_ne!(v["shape"], "ellipsoid");
+        if v["shape"] == "hull" {
+            let n = v["points"].as_array().unwrap().len();
+            assert!((4..=12).contains(&n), "{n} hull points");
+        }
+    }
+    // The independent check reads the file and finds every triangle enclosed.
+    let bunny = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");
+    let o = bvseg(&dir, &["verify", bunny, "p.json", "--points", "20000"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{out}{}", stderr(&o));
+    assert!(out.contains("triangles enclosed"), "{out}");
+}
+
+#[test]
 fn usage_errors_exit_2() {
     let dir = scratch("usage_errors_exit_2");
     for args in [
         &["segment", "--k", "2", "--tov", "0.2"][..],
         &["segment", "--k", "2", "--mov", "0.2"],
-        &["segment", "--bv", "sphere"],
+        &["segment", "--bv", "torus"],
+        &["segment", "--target", "unity"],
+        &["segment", "--target", "parry", "--bv", "obb"],
         &["segment", "--threads", "0"],
         &["segment", "--k", "two"],
         &["segment", "--frobnicate"],

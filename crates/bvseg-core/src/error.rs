@@ -115,4 +115,17 @@ pub enum ParamError {
     /// [`crate::Params::max_sweeps`] is 0.
     #[error("max_sweeps must be at least 1")]
     MaxSweeps,
+    /// [`crate::Params::kinds`] is empty.
+    #[error("the set of volume kinds is empty")]
+    NoKinds,
+    /// [`crate::Params::max_hull_vertices`] is outside `min..=max`.
+    #[error("max_hull_vertices must be between {min} and {max}, got {value}")]
+    MaxHullVertices {
+        /// The value given.
+        value: usize,
+        /// Smallest allowed (a tetrahedron).
+        min: usize,
+        /// Largest allowed ([`crate::MAX_HULL_VERTICES`], PhysX's limit).
+        max: usize,
+    },
 }

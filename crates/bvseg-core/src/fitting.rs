@@ -11,13 +11,11 @@ use std::sync::{Arc, OnceLock};
 use glam::DVec3;
 
 use crate::bounding::hull::hull_points;
-use crate::bounding::mvee::mvee_of_hull;
-use crate::bounding::obb::min_obb;
 use crate::enclosure::Enclosure;
 use crate::metrics::{outside_cells, protrusion_capped, Cell, SurfaceDistance};
 use crate::moments::Moments;
 use crate::partition::Solid;
-use crate::{BoundingKind, BoundingVolume, Cancel, Mesh};
+use crate::{BoundingVolume, Cancel, Kinds, Mesh};
 
 /// Tolerance of the ellipsoid fit (relative volume excess over the optimum).
 pub const MVEE_TOL: f64 = 1e-4;
@@ -37,12 +35,13 @@ pub struct Fit {
     protrusion: OnceLock<f64>,
 }
 
-/// Cache key: the part's exact moments.
-pub type FitKey = [u64; 10];
+/// Cache key: the part's exact moments and the kinds it may be fitted with.
+pub type FitKey = [u64; 11];
 
-/// The cache key of a part with moments `m`.
-pub fn fit_key(m: &Moments) -> FitKey {
+/// The cache key of a part with moments `m` fitted with one of `kinds`.
+pub fn fit_key(m: &Moments, kinds: Kinds) -> FitKey {
     [
+        u64::from(kinds.bits()),
         m.n.to_bits(),
         m.s.x.to_bits(),
         m.s.y.to_bits(),
@@ -56,12 +55,15 @@ pub fn fit_key(m: &Moments) -> FitKey {
     ]
 }
 
-/// Fits volumes of one kind to parts of one solid, with a cache. It also keeps the run's
+/// Fits volumes of a set of kinds to parts of one solid, with a cache: each part gets the
+/// kind whose volume covers the fewest lattice cells outside the solid (then the smaller
+/// volume, then the earlier kind). It also keeps the run's
 /// account: the outside cells its fits have counted, against a bound (see
 /// [`Fitter::exhausted`]), and the run's [`Cancel`] flag.
 #[derive(Debug)]
 pub struct Fitter {
-    kind: BoundingKind,
+    kinds: Kinds,
+    max_hull_vertices: usize,
     enclosure: Enclosure,
     cache: FitCache,
     cancel: Cancel,
@@ -118,23 +120,24 @@ impl FitCache {
 }
 
 impl Fitter {
-    /// A fitter for `mesh` sampled as `solid`.
-    pub fn new(mesh: &Mesh, solid: &Solid, kind: BoundingKind) -> Self {
-        Self::with_budget(mesh, solid, kind, [u64::MAX; 2], Cancel::new())
+    /// A fitter for `mesh` sampled as `solid`, of the `kinds` (hulls of at most 32 vertices).
+    pub fn new(mesh: &Mesh, solid: &Solid, kinds: Kinds) -> Self {
+        Self::with_budget(mesh, solid, (kinds, 32), [u64::MAX; 2], Cancel::new())
     }
 
-    /// A fitter whose [`Fitter::exhausted`] says so once its fits have counted `budget[0]`
+    /// A fitter of `kinds` with hulls of at most `max_hull_vertices`, whose [`Fitter::exhausted`] says so once its fits have counted `budget[0]`
     /// outside cells, or `cancel` is set, and whose protrusions search the surface exactly
     /// until they have visited `budget[1]` nodes and triangles of its tree.
     pub fn with_budget(
         mesh: &Mesh,
         solid: &Solid,
-        kind: BoundingKind,
+        (kinds, max_hull_vertices): (Kinds, usize),
         [budget, distance_budget]: [u64; 2],
         cancel: Cancel,
     ) -> Self {
         Self {
-            kind,
+            kinds,
+            max_hull_vertices,
             enclosure: Enclosure::new(mesh, solid),
             cache: FitCache::default(),
             cancel,
@@ -158,30 +161,44 @@ impl Fitter {
         &self.enclosure
     }
 
-    /// Fit a volume of this fitter's kind to `points`, the vertices of a convex hull (from
+    /// Fit a volume of this fitter's kinds to `points`, the vertices of a convex hull (from
     /// [`hull_points`]): the ellipsoid fit does not compute their hull again. Any other point
     /// set still gets a correct fit, only a slower one.
     pub fn fit_points(&self, solid: &Solid, points: &[DVec3]) -> BoundingVolume {
-        let min_r = 0.5 * solid.grid.h;
-        match self.kind {
-            BoundingKind::Ellipsoid => mvee_of_hull(points, MVEE_TOL, min_r),
-            BoundingKind::Obb => min_obb(points, min_r),
-            BoundingKind::Mixed => {
-                let e = mvee_of_hull(points, MVEE_TOL, min_r);
-                let b = min_obb(points, min_r);
-                if b.volume() < e.volume() {
-                    b
-                } else {
-                    e
-                }
-            }
-        }
+        self.choose(solid, points, self.kinds).0
     }
 
-    fn make(&self, solid: &Solid, points: &[DVec3]) -> Fit {
+    /// This fitter's kinds.
+    pub fn kinds(&self) -> Kinds {
+        self.kinds
+    }
+
+    /// The best of the kinds' volumes for `points` (see the type's docs) and its outside
+    /// cells.
+    fn choose(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> (BoundingVolume, Vec<Cell>) {
+        let min_r = 0.5 * solid.grid.h;
+        let mut best: Option<(BoundingVolume, Vec<Cell>)> = None;
+        for shape in kinds.shapes() {
+            let v = crate::bounding::fit(shape, points, min_r, self.max_hull_vertices);
+            let cells = outside_cells(&solid.grid, &v);
+            let better = best
+                .as_ref()
+                .is_none_or(|(b, bc)| (cells.len(), v.volume()) < (bc.len(), b.volume()));
+            if better {
+                best = Some((v, cells));
+            }
+        }
+        // `Params::validate` keeps the set non-empty; an empty one still gets a volume.
+        best.unwrap_or_else(|| {
+            let v = crate::bounding::fit(crate::Shape::Ellipsoid, points, min_r, 32);
+            let cells = outside_cells(&solid.grid, &v);
+            (v, cells)
+        })
+    }
+
+    fn make(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> Fit {
         let hull = hull_points(points);
-        let volume = self.fit_points(solid, &hull);
-        let outside = outside_cells(&solid.grid, &volume);
+        let (volume, outside) = self.choose(solid, &hull, kinds);
         crate::work::add(points.len() + outside.len());
         self.cells
             .fetch_add(outside.len() as u64, Ordering::Relaxed);
@@ -251,7 +268,12 @@ impl Fitter {
 
     /// The cached fit of a part with moments `m`, if any.
     pub fn get(&self, m: &Moments) -> Option<Arc<Fit>> {
-        self.cache.get(&fit_key(m)).cloned()
+        self.get_as(m, self.kinds)
+    }
+
+    /// The cached fit of a part with moments `m` among `kinds`, if any.
+    pub fn get_as(&self, m: &Moments, kinds: Kinds) -> Option<Arc<Fit>> {
+        self.cache.get(&fit_key(m, kinds)).cloned()
     }
 
     /// Fit every part of a labelling: `parts[i]` are the moments of part `i`, `labels` the
@@ -263,7 +285,7 @@ impl Fitter {
         labels: &[u32],
         parts: &[Moments],
     ) -> Vec<Arc<Fit>> {
-        let keys: Vec<FitKey> = parts.iter().map(fit_key).collect();
+        let keys: Vec<FitKey> = parts.iter().map(|m| fit_key(m, self.kinds)).collect();
         let missing: Vec<usize> = (0..parts.len())
             .filter(|&i| !self.cache.contains_key(&keys[i]))
             .collect();
@@ -276,7 +298,7 @@ impl Fitter {
                 let pts = self
                     .enclosure
                     .points(mesh, solid, labels, &members[i], i as u32);
-                self.make(solid, &pts)
+                self.make(solid, &pts, self.kinds)
             };
             let new: Vec<Fit> = crate::parallel::map(&missing, one);
             for (&i, f) in missing.iter().zip(new) {
@@ -294,7 +316,7 @@ impl Fitter {
                         .filter(|&s| labels[s as usize] == i as u32)
                         .collect();
                     let pts = self.enclosure.points(mesh, solid, labels, &mem, i as u32);
-                    Arc::new(self.make(solid, &pts))
+                    Arc::new(self.make(solid, &pts, self.kinds))
                 }
             })
             .collect()
@@ -303,12 +325,22 @@ impl Fitter {
     /// Fit parts given directly by their enclosure points, keyed by their moments (for
     /// candidate parts that are not in any labelling yet). Runs in parallel.
     pub fn fit_candidates(&mut self, solid: &Solid, cands: Vec<(Moments, Vec<DVec3>)>) {
-        let todo: Vec<(FitKey, Vec<DVec3>)> = cands
+        let kinds = self.kinds;
+        self.fit_candidates_as(
+            solid,
+            cands.into_iter().map(|(m, p)| (m, p, kinds)).collect(),
+        );
+    }
+
+    /// [`Fitter::fit_candidates`], each candidate with the kinds it may be fitted with (the
+    /// tightening keeps each part's kind: see [`crate::tightening`]).
+    pub fn fit_candidates_as(&mut self, solid: &Solid, cands: Vec<(Moments, Vec<DVec3>, Kinds)>) {
+        let todo: Vec<(FitKey, Vec<DVec3>, Kinds)> = cands
             .into_iter()
-            .map(|(m, p)| (fit_key(&m), p))
-            .filter(|(k, _)| !self.cache.contains_key(k))
+            .map(|(m, p, k)| (fit_key(&m, k), p, k))
+            .filter(|(k, _, _)| !self.cache.contains_key(k))
             .collect();
-        let one = |(k, p): &(FitKey, Vec<DVec3>)| (*k, self.make(solid, p));
+        let one = |(k, p, kinds): &(FitKey, Vec<DVec3>, Kinds)| (*k, self.make(solid, p, *kinds));
         let new: Vec<(FitKey, Fit)> = crate::parallel::map(&todo, one);
         for (k, f) in new {
             self.cache.insert(k, Arc::new(f));

@@ -25,7 +25,7 @@ pub fn build(
         .iter()
         .enumerate()
         .map(|(i, v)| HierarchyNode {
-            volume: *v,
+            volume: v.clone(),
             part: Some(i),
             children: None,
         })

@@ -45,6 +45,7 @@ mod fitting;
 mod flooding;
 mod hierarchy;
 mod initialization;
+mod kinds;
 mod linalg;
 mod math;
 mod mesh;
@@ -66,11 +67,12 @@ mod volume;
 
 pub use cancel::Cancel;
 pub use error::{Error, MeshError, ParamError};
+pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
-pub use params::{BoundingKind, Params, DEFAULT_MAX_PROTRUSION, MAX_K, MAX_SAMPLES};
+pub use params::{Params, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES};
 pub use pipeline::Segmenter;
 pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind};
-pub use volume::{BoundingVolume, Shape};
+pub use volume::{BoundingVolume, Polytope, Shape};
 
 /// The stages' own entry points, for the benchmarks, the fuzz targets and the tests that
 /// check one stage at a time. Not part of the API: anything here may change in any release.

@@ -1,38 +1,17 @@
-//! What the user controls.
-use crate::ParamError;
+//! The parameters of a run.
+use crate::error::ParamError;
+use crate::kinds::Kinds;
 
-/// Which bounding volume each part gets in the final output.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum BoundingKind {
-    /// Minimum-volume enclosing ellipsoid of each part.
-    #[default]
-    Ellipsoid,
-    /// Tight oriented bounding box of each part.
-    Obb,
-    /// Per part, whichever of the two is smaller.
-    Mixed,
-}
-
-impl BoundingKind {
-    /// The name used in the `bvseg.volumes/1` JSON schema.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            BoundingKind::Ellipsoid => "ellipsoid",
-            BoundingKind::Obb => "obb",
-            BoundingKind::Mixed => "mixed",
-        }
-    }
-}
-
-/// Parameters of [`crate::segment`]. `Params::default()`: 20,000 samples, ellipsoids, and
+/// Parameters of [`crate::segment`]. `Params::default()`: 20,000 samples, every primitive
+/// kind ([`Kinds::PRIMITIVES`]), and
 /// tolerance mode with TOV below 0.3 (the paper's sigma_G) and the protrusion below
 /// [`DEFAULT_MAX_PROTRUSION`] of the box diagonal, at most 64 parts.
 /// [`Params::validate`] checks every range below; [`crate::segment`] calls it first.
 ///
 /// ```
-/// use bvseg_core::{BoundingKind, Params};
+/// use bvseg_core::{Kinds, Params};
 /// // Eight oriented boxes, whatever the tolerances.
-/// let p = Params { k: Some(8), bounding: BoundingKind::Obb, ..Params::default() };
+/// let p = Params { k: Some(8), kinds: Kinds::OBB, ..Params::default() };
 /// assert!(p.validate().is_ok());
 /// ```
 #[derive(Debug, Clone, PartialEq)]
@@ -45,8 +24,17 @@ pub struct Params {
     /// Seed of the initialisation: equal seeds give bit-identical results, on any thread
     /// count and platform. Default 0; any value.
     pub seed: u64,
-    /// The kind of bounding volume of each part. Default [`BoundingKind::Ellipsoid`].
-    pub bounding: BoundingKind,
+    /// The kinds of bounding volume a part may get: each part gets, of these, the volume
+    /// that adds the least outside volume. Default [`Kinds::PRIMITIVES`] (ellipsoid, box,
+    /// sphere, capsule, cylinder: the tightest primitive set on the shared meshes);
+    /// [`Kinds::ELLIPSOID`] is the paper's; [`crate::Target::kinds`] gives an engine's
+    /// native set. Not empty.
+    pub kinds: Kinds,
+    /// Most vertices of a hull volume ([`crate::Shape::Hull`]): the hull of a part with more
+    /// is replaced by an enclosing polyhedron with at most this many (engines cap convex
+    /// meshes: PhysX at 255, Unity at 255, many pipelines at 32 or 64). Default 32; range
+    /// 4 to [`MAX_HULL_VERTICES`]. Fewer vertices are looser and cheaper to collide.
+    pub max_hull_vertices: usize,
     /// Fixed number of parts: skip the tolerance loop and return exactly this many parts
     /// (fewer only when the solid has fewer samples). Default `None` (tolerance mode); range
     /// 1 to `samples / 8`.
@@ -98,7 +86,8 @@ impl Default for Params {
         Self {
             samples: 20_000,
             seed: 0,
-            bounding: BoundingKind::Ellipsoid,
+            kinds: Kinds::PRIMITIVES,
+            max_hull_vertices: 32,
             k: None,
             tov: 0.3,
             mov: None,
@@ -118,6 +107,9 @@ pub const MAX_SAMPLES: usize = 50_000_000;
 
 /// Default [`Params::max_protrusion`]: a fraction of the box diagonal.
 pub const DEFAULT_MAX_PROTRUSION: f64 = 0.05;
+
+/// Largest [`Params::max_hull_vertices`] (PhysX's limit on a convex mesh).
+pub const MAX_HULL_VERTICES: usize = 255;
 
 /// Largest [`Params::max_k`].
 pub const MAX_K: usize = 4096;
@@ -189,6 +181,16 @@ impl Params {
         }
         if self.max_sweeps == 0 {
             return Err(ParamError::MaxSweeps);
+        }
+        if self.kinds.is_empty() {
+            return Err(ParamError::NoKinds);
+        }
+        if !(4..=MAX_HULL_VERTICES).contains(&self.max_hull_vertices) {
+            return Err(ParamError::MaxHullVertices {
+                value: self.max_hull_vertices,
+                min: 4,
+                max: MAX_HULL_VERTICES,
+            });
         }
         Ok(())
     }

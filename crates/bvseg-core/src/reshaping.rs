@@ -121,6 +121,7 @@ fn hold(points: &[DVec3], c: DVec3, axes: DMat3, radii: DVec3, min_r: f64) -> Bo
         center: c,
         axes,
         radii,
+        polytope: None,
     };
     let g = points.iter().map(|&p| v.gauge(p)).fold(0.0, f64::max);
     if g > 0.0 && g.is_finite() {
@@ -144,9 +145,9 @@ fn search(
     spent: &dyn Fn() -> bool,
 ) -> BoundingVolume {
     let Some(mut best_s) = score(start, usize::MAX) else {
-        return *start;
+        return start.clone();
     };
-    let mut best = *start;
+    let mut best = start.clone();
     let mut best_vol = best.volume();
     let mean_r = math::cbrt(start.radii.x * start.radii.y * start.radii.z);
     // Step sizes: centre (world units), log semi-axes, rotation angle (radians).
@@ -155,7 +156,7 @@ fn search(
     let mut level = 0;
     let moves: Vec<(usize, f64)> = (0..9).flat_map(|d| [(d, 1.0), (d, -1.0)]).collect();
     while level < LEVELS && trials < MAX_TRIALS && best_s.0 > 0 && !spent() {
-        let from = best;
+        let from = best.clone();
         let trial = |&(dim, sign): &(usize, f64)| {
             let (mut c, mut axes, mut radii) = (from.center, from.axes, from.radii);
             match dim {
@@ -225,10 +226,20 @@ mod tests {
         let n = pts.len() as f64 - 128.0;
         let hull = crate::bounding::hull::hull_points(&pts);
         let mvee = crate::bounding::mvee::mvee_of_hull(&hull, 1e-4, 0.5);
-        let before = outside_volumes(g, &[mvee], &[n]).ov[0];
+        let before = outside_volumes(g, std::slice::from_ref(&mvee), &[n]).ov[0];
         let cells = vec![outside_cells(g, &mvee)];
-        let after_v = reshape(&solid, &[&hull], &[mvee], cells, &[n], 0.5, u64::MAX).0[0];
-        let after = outside_volumes(g, &[after_v], &[n]).ov[0];
+        let after_v = reshape(
+            &solid,
+            &[&hull],
+            std::slice::from_ref(&mvee),
+            cells,
+            &[n],
+            0.5,
+            u64::MAX,
+        )
+        .0[0]
+            .clone();
+        let after = outside_volumes(g, std::slice::from_ref(&after_v), &[n]).ov[0];
         // The minimum-volume ellipsoid bulges by about 1/3 (more on the lattice); the reshaped
         // one reaches along the cylinder and bulges far less.
         assert!(before > 0.25, "MVEE OV {before}");
@@ -263,7 +274,7 @@ mod tests {
         let va = crate::bounding::mvee::mvee_of_hull(&ha, 1e-4, 0.5);
         let vb = crate::bounding::mvee::mvee_of_hull(&hb, 1e-4, 0.5);
         let counts = [a.len() as f64, b.len() as f64];
-        let before = outside_volumes(g, &[va, vb], &counts);
+        let before = outside_volumes(g, &[va.clone(), vb.clone()], &counts);
         let cells = vec![outside_cells(g, &va), outside_cells(g, &vb)];
         let (new, _) = reshape(
             &solid,

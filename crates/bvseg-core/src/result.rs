@@ -1,5 +1,5 @@
 //! What [`crate::segment`] returns.
-use crate::{BoundingKind, BoundingVolume};
+use crate::{BoundingVolume, Kinds};
 
 /// One part of the segmentation and its bounding volume.
 #[derive(Debug, Clone, PartialEq)]
@@ -108,8 +108,8 @@ pub struct HierarchyNode {
 #[derive(Debug, Clone, PartialEq)]
 #[must_use]
 pub struct Segmentation {
-    /// The bounding-volume kind that was requested.
-    pub kind: BoundingKind,
+    /// The kinds of volume the run could choose from.
+    pub kinds: Kinds,
     /// The parts, each with its bounding volume.
     pub parts: Vec<Part>,
     /// Summary figures.

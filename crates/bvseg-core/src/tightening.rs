@@ -17,7 +17,7 @@ use crate::moments::Moments;
 use crate::partition::{Partition, Solid};
 use crate::pipeline::Context;
 use crate::sampling::NONE;
-use crate::Mesh;
+use crate::{Kinds, Mesh};
 
 /// Largest gauge (1 = on the surface) that a moved layer may have in the receiving part's
 /// current volume for the move to be tried.
@@ -140,8 +140,14 @@ fn fit_moves(
         .iter()
         .enumerate()
         .flat_map(|(i, mv)| {
-            let from = fitter.get(&mv.m_from).is_none().then_some((i, false));
-            let to = fitter.get(&mv.m_to).is_none().then_some((i, true));
+            let from = fitter
+                .get_as(&mv.m_from, kind(current, mv.from))
+                .is_none()
+                .then_some((i, false));
+            let to = fitter
+                .get_as(&mv.m_to, kind(current, mv.to))
+                .is_none()
+                .then_some((i, true));
             from.into_iter().chain(to)
         })
         .collect();
@@ -158,7 +164,7 @@ fn fit_moves(
             // all its new points, at a fraction of the cost.
             let mut pts = current[mv.to as usize].hull.clone();
             pts.extend(enclosure.points_with(mesh, solid, label_of, &mv.layer, mv.to));
-            (mv.m_to, pts)
+            (mv.m_to, pts, kind(current, mv.to))
         } else {
             let mem: Vec<u32> = members[mv.from as usize]
                 .iter()
@@ -168,10 +174,26 @@ fn fit_moves(
             (
                 mv.m_from,
                 enclosure.points_with(mesh, solid, label_of, &mem, mv.from),
+                kind(current, mv.from),
             )
         }
     });
-    fitter.fit_candidates(solid, work);
+    fitter.fit_candidates_as(solid, work);
+}
+
+/// The kind a move's new fit of part `i` may have: the kind of its current fit. The moves
+/// are judged with each part's real kind, at the cost of one fit instead of one per kind of
+/// the run; the refit after the tightening chooses among them all again.
+fn kind(current: &[Arc<Fit>], i: u32) -> Kinds {
+    Kinds::only(current[i as usize].volume.shape)
+}
+
+/// The fits of a move's two new parts (see [`kind`]), if both are cached.
+fn move_fits(fitter: &Fitter, mv: &Move, current: &[Arc<Fit>]) -> Option<(Arc<Fit>, Arc<Fit>)> {
+    Some((
+        fitter.get_as(&mv.m_from, kind(current, mv.from))?,
+        fitter.get_as(&mv.m_to, kind(current, mv.to))?,
+    ))
 }
 
 /// Apply a move to the partition.
@@ -241,7 +263,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
         let ov = |f: &Fit, n: f64| relative(f.outside.len(), n);
         let mut scored: Vec<(i64, usize)> = Vec::new();
         for (i, mv) in cands.iter().enumerate() {
-            let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
+            let Some((fa, fb)) = move_fits(fitter, mv, &fits) else {
                 continue;
             };
             let old = [
@@ -264,7 +286,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             if touched[a] || touched[b] {
                 continue;
             }
-            let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
+            let Some((fa, fb)) = move_fits(fitter, mv, &fits) else {
                 continue;
             };
             let limit = |old: &Fit, n_old: f64| ov(old, n_old).max(mov_tol);
@@ -356,7 +378,7 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
         let mut best: Option<(f64, usize)> = None;
         for (i, mv) in cands.iter().enumerate() {
             let (a, b) = (mv.from as usize, mv.to as usize);
-            let (Some(fa), Some(fb)) = (fitter.get(&mv.m_from), fitter.get(&mv.m_to)) else {
+            let Some((fa, fb)) = move_fits(fitter, mv, &fits) else {
                 continue;
             };
             let others = (0..ov.len())

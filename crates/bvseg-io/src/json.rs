@@ -1,46 +1,115 @@
-//! The `bvseg.volumes/1` result file, as `shared/tools/README.md` defines it (the format the
-//! independent judge `bveval.py` and the baselines read and write).
+//! The `bvseg.volumes/1` and `/2` result files, as `shared/tools/README.md` defines them (the
+//! format the independent judge `bveval.py` and the baselines read and write).
 //!
-//! Required: `schema`, `kind`, `volumes` (`shape`, `center`, `axes` as unit rows, `radii`,
-//! `fraction`) and `metrics` (`k`, `tov`, `mov`, `samples`). Extras that readers ignore:
-//! `generator`, `metrics.f`, `cell_size`, `history` and `hierarchy`. Per-triangle labels are
-//! left out: they would dwarf the rest.
+//! Required: `schema`, `kind`, `volumes` (`shape` and `fraction`, and per shape: `center`,
+//! `axes` as unit rows and `radii` for ellipsoids and boxes; `center` and `radius` for
+//! spheres; `center`, `axis`, `half_length` and `radius` for capsules and cylinders; `points`
+//! for hulls) and `metrics` (`k`, `tov`, `mov`, `samples`). A file whose volumes (and
+//! hierarchy nodes) are all ellipsoids and boxes is schema 1, so that readers of schema 1
+//! keep working; any other is schema 2. `kind` is the one shape the volumes have, or
+//! `mixed`. Extras that readers ignore: `generator`, `kinds` (the set the run could choose
+//! from), `metrics.f`, `cell_size`, `history` and `hierarchy`. Per-triangle labels are left
+//! out: they would dwarf the rest.
 //!
 //! The file holds nothing that depends on the run (no time, no host, no thread count), so
 //! equal inputs give byte-identical files. Numbers are printed by `serde_json`, which writes
 //! the shortest decimal that reads back to the same f64.
 use std::path::Path;
 
-use bvseg_core::{BoundingVolume, Segmentation};
+use bvseg_core::{BoundingVolume, Segmentation, Shape};
 use serde::Serialize;
 
 use crate::{write_atomic, IoError};
 
-/// The schema identifier written to every file.
+/// The schema identifier of files with ellipsoids and boxes only.
 pub const SCHEMA: &str = "bvseg.volumes/1";
+
+/// The schema identifier of files with any other shape.
+pub const SCHEMA_V2: &str = "bvseg.volumes/2";
 
 /// What writes the file, recorded as `generator`.
 pub const GENERATOR: &str = concat!("bvseg ", env!("CARGO_PKG_VERSION"));
 
+/// One volume's fields, in the schema's order for its shape.
 #[derive(Serialize)]
 struct Volume {
     shape: &'static str,
-    center: [f64; 3],
-    axes: [[f64; 3]; 3],
-    radii: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    center: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    axes: Option<[[f64; 3]; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    radii: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    axis: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    half_length: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    radius: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    points: Option<Vec<[f64; 3]>>,
 }
 
 impl From<&BoundingVolume> for Volume {
     fn from(v: &BoundingVolume) -> Self {
-        Self {
+        let mut out = Self {
             shape: v.shape.as_str(),
-            center: v.center.to_array(),
-            // The core keeps the axes as the columns of its matrix; the schema wants them as
-            // rows.
-            axes: [v.axes.x_axis, v.axes.y_axis, v.axes.z_axis].map(|a| a.to_array()),
-            radii: v.radii.to_array(),
+            center: Some(v.center.to_array()),
+            axes: None,
+            radii: None,
+            axis: None,
+            half_length: None,
+            radius: None,
+            points: None,
+        };
+        match v.shape {
+            Shape::Ellipsoid | Shape::Obb => {
+                // The core keeps the axes as the columns of its matrix; the schema wants them
+                // as rows.
+                out.axes =
+                    Some([v.axes.x_axis, v.axes.y_axis, v.axes.z_axis].map(|a| a.to_array()));
+                out.radii = Some(v.radii.to_array());
+            }
+            Shape::Sphere => out.radius = Some(v.radius()),
+            Shape::Capsule | Shape::Cylinder => {
+                out.axis = Some(v.axis().to_array());
+                out.half_length = Some(v.half_length());
+                out.radius = Some(v.radius());
+            }
+            Shape::Hull => {
+                out.center = None;
+                out.points = Some(v.hull_points().iter().map(|p| p.to_array()).collect());
+            }
         }
+        out
     }
+}
+
+/// One volume as the schema writes it (without `fraction`), for the writers that embed the
+/// exact parameters (glTF `extras`).
+pub(crate) fn volume_json(v: &BoundingVolume) -> serde_json::Value {
+    serde_json::to_value(Volume::from(v)).unwrap_or(serde_json::Value::Null)
+}
+
+/// The schema and the `kind` of a file holding `volumes`: schema 1 when every shape is an
+/// ellipsoid or a box; `kind` the one shape they all have, or `mixed`.
+pub fn schema_and_kind<'a>(
+    volumes: impl IntoIterator<Item = &'a BoundingVolume>,
+) -> (&'static str, &'static str) {
+    let mut shapes = std::collections::BTreeSet::new();
+    for v in volumes {
+        shapes.insert(v.shape);
+    }
+    let schema = if shapes.iter().all(|s| s.in_schema_v1()) {
+        SCHEMA
+    } else {
+        SCHEMA_V2
+    };
+    let kind = match (shapes.len(), shapes.first()) {
+        (1, Some(s)) => s.as_str(),
+        _ => "mixed",
+    };
+    (schema, kind)
 }
 
 #[derive(Serialize)]
@@ -116,11 +185,19 @@ pub fn to_json_string(seg: &Segmentation) -> String {
         f: m.f,
     };
     let mut out = String::new();
+    let (schema, _) = schema_and_kind(
+        seg.parts
+            .iter()
+            .map(|p| &p.volume)
+            .chain(seg.hierarchy.iter().map(|n| &n.volume)),
+    );
+    let (_, kind) = schema_and_kind(seg.parts.iter().map(|p| &p.volume));
     out.push_str(&format!(
-        "{{\"schema\":{},\"generator\":{},\"kind\":{}",
-        compact(&SCHEMA),
+        "{{\"schema\":{},\"generator\":{},\"kind\":{},\"kinds\":{}",
+        compact(&schema),
         compact(&GENERATOR),
-        compact(&seg.kind.as_str()),
+        compact(&kind),
+        compact(&seg.kinds.to_string()),
     ));
     out.push_str(&format!(",\n\"metrics\":{}", compact(&metrics)));
     out.push_str(&format!(",\n\"cell_size\":{}", compact(&seg.cell_size)));
@@ -177,19 +254,18 @@ pub fn write_json(path: impl AsRef<Path>, seg: &Segmentation) -> Result<(), IoEr
 mod tests {
     use super::*;
     use bvseg_core::{
-        BoundingKind, HierarchyNode, Metrics as CoreMetrics, Part, Shape, Step as CoreStep,
-        StepKind,
+        HierarchyNode, Kinds, Metrics as CoreMetrics, Part, Step as CoreStep, StepKind,
     };
     use glam::{DMat3, DVec3, EulerRot};
     use serde_json::Value;
 
     fn volume(shape: Shape, c: f64) -> BoundingVolume {
-        BoundingVolume {
+        BoundingVolume::frame(
             shape,
-            center: DVec3::new(c, 0.1, -0.2),
-            axes: DMat3::from_euler(EulerRot::XYZ, 0.3, -1.1, 2.0),
-            radii: DVec3::new(1.5, 0.25, 1.0 / 3.0),
-        }
+            DVec3::new(c, 0.1, -0.2),
+            DMat3::from_euler(EulerRot::XYZ, 0.3, -1.1, 2.0),
+            DVec3::new(1.5, 0.25, 1.0 / 3.0),
+        )
     }
 
     fn segmentation() -> Segmentation {
@@ -212,7 +288,7 @@ mod tests {
             },
         ];
         Segmentation {
-            kind: BoundingKind::Mixed,
+            kinds: Kinds::MIXED,
             parts,
             metrics: CoreMetrics {
                 k: 2,

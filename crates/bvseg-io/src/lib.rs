@@ -28,7 +28,7 @@ pub use volumes_read::{
 pub use atomic::write_atomic;
 pub use error::IoError;
 pub use finish::{LoadStats, LoadedMesh, MAX_TRIANGLES};
-pub use json::{to_json_string, write_json, GENERATOR, SCHEMA};
+pub use json::{schema_and_kind, to_json_string, write_json, GENERATOR, SCHEMA, SCHEMA_V2};
 pub use obj::MAX_INPUT_BYTES;
 pub use report::MeshReport;
 pub use summary::{CliSummary, RunSummary, Tolerances, ViewerSummary};

@@ -30,8 +30,9 @@ pub struct RunSummary {
     pub mesh: String,
     /// Interior samples used.
     pub samples: usize,
-    /// Bounding-volume kind (`ellipsoid`, `obb` or `mixed`).
-    pub kind: &'static str,
+    /// The kinds of volume the run could choose from (`ellipsoid`, `mixed`, or a comma list
+    /// such as `ellipsoid,obb,sphere,capsule,cylinder`).
+    pub kind: String,
     /// What the command line adds, after the shared figures.
     #[serde(flatten)]
     pub cli: Option<CliSummary>,
@@ -114,7 +115,7 @@ impl RunSummary {
             protrusion_rel: m.protrusion_rel,
             mesh: mesh.to_owned(),
             samples: m.samples,
-            kind: seg.kind.as_str(),
+            kind: seg.kinds.to_string(),
             cli: None,
             viewer: None,
         }

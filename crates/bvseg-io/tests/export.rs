@@ -1,22 +1,25 @@
 //! The engine-ready outputs read back: GLB through the `gltf` crate, MJCF as XML, OBJ through
 //! our own reader.
 // Tests and benchmarks state their expectations by panicking.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::needless_range_loop)]
 use std::fs;
 
-use bvseg_core::{BoundingKind, BoundingVolume, Metrics, Part, Segmentation, Shape};
+use bvseg_core::{BoundingVolume, Kinds, Metrics, Part, Segmentation, Shape};
 use bvseg_io::export::{to_glb, to_labels, to_mjcf, to_obj, write_output, ExportOptions};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 
+fn rot(euler: (f64, f64, f64)) -> DMat3 {
+    DMat3::from_quat(DQuat::from_euler(EulerRot::XYZ, euler.0, euler.1, euler.2))
+}
+
 fn part(shape: Shape, center: DVec3, radii: DVec3, euler: (f64, f64, f64)) -> Part {
+    with_volume(BoundingVolume::frame(shape, center, rot(euler), radii))
+}
+
+fn with_volume(volume: BoundingVolume) -> Part {
     Part {
-        volume: BoundingVolume {
-            shape,
-            center,
-            axes: DMat3::from_quat(DQuat::from_euler(EulerRot::XYZ, euler.0, euler.1, euler.2)),
-            radii,
-        },
-        fraction: 0.5,
+        volume,
+        fraction: 1.0 / 6.0,
         samples: 100,
         ov: 0.1,
         e: 1.0,
@@ -24,10 +27,16 @@ fn part(shape: Shape, center: DVec3, radii: DVec3, euler: (f64, f64, f64)) -> Pa
     }
 }
 
-/// Two parts, one of each shape, over a two-triangle "mesh".
+/// Six parts, one of each shape, over a two-triangle "mesh".
 fn seg() -> Segmentation {
+    let hull_points: Vec<DVec3> = (0..10)
+        .map(|i| {
+            let a = i as f64 * 2.4;
+            DVec3::new(3.0 + a.cos(), a.sin() * 0.7, 0.3 * i as f64)
+        })
+        .collect();
     Segmentation {
-        kind: BoundingKind::Mixed,
+        kinds: Kinds::PRIMITIVES.with(Shape::Hull),
         parts: vec![
             part(
                 Shape::Ellipsoid,
@@ -41,6 +50,20 @@ fn seg() -> Segmentation {
                 DVec3::new(0.25, 0.75, 1.5),
                 (1.2, 0.4, -0.7),
             ),
+            with_volume(BoundingVolume::sphere(DVec3::new(0.5, -2.0, 1.0), 0.75)),
+            with_volume(BoundingVolume::capsule(
+                DVec3::new(2.0, 1.0, -1.0),
+                rot((0.2, 0.9, -0.4)).z_axis,
+                1.25,
+                0.4,
+            )),
+            with_volume(BoundingVolume::cylinder(
+                DVec3::new(-2.0, 1.5, 0.0),
+                rot((-0.6, 0.1, 0.8)).z_axis,
+                0.8,
+                0.3,
+            )),
+            with_volume(BoundingVolume::hull(&hull_points).unwrap()),
         ],
         metrics: Metrics {
             k: 2,
@@ -91,12 +114,30 @@ fn glb_has_one_node_per_volume_and_colliders() {
         let v = &seg.parts[i].volume;
         assert_eq!(n.name(), Some(format!("part_{i}").as_str()));
         let (t, r, s) = n.transform().decomposed();
+        let q = DQuat::from_xyzw(r[0] as f64, r[1] as f64, r[2] as f64, r[3] as f64);
         for j in 0..3 {
             assert!(close(t[j] as f64, v.center[j], 1e-6));
-            assert!(close(s[j] as f64, v.radii[j], 1e-6));
         }
-        let q = DQuat::from_xyzw(r[0] as f64, r[1] as f64, r[2] as f64, r[3] as f64);
-        assert!((q * DVec3::Y - v.axes.y_axis).length() < 1e-6);
+        match v.shape {
+            Shape::Ellipsoid | Shape::Obb | Shape::Sphere => {
+                for j in 0..3 {
+                    assert!(close(s[j] as f64, v.radii[j], 1e-6));
+                }
+                assert!((q * DVec3::Y - v.axes.y_axis).length() < 1e-6);
+            }
+            Shape::Cylinder => {
+                let want = [v.radius(), v.half_length(), v.radius()];
+                for j in 0..3 {
+                    assert!(close(s[j] as f64, want[j], 1e-6));
+                }
+                assert!((q * DVec3::Y - v.axis()).length() < 1e-6);
+            }
+            Shape::Capsule => {
+                assert_eq!(s, [1.0; 3]);
+                assert!((q * DVec3::Y - v.axis()).length() < 1e-6);
+            }
+            Shape::Hull => assert_eq!(s, [1.0; 3]),
+        }
         assert!(n.mesh().is_some());
     }
     // Colliders: unscaled; a box shape of the exact size, a hull enclosing the ellipsoid.
@@ -113,11 +154,60 @@ fn glb_has_one_node_per_volume_and_colliders() {
         let v = &seg.parts[i].volume;
         assert_eq!(n.transform().decomposed().2, [1.0; 3]);
         let geom = &n.extension_value("KHR_physics_rigid_bodies").unwrap()["collider"]["geometry"];
+        let shape = |kind: &str| &shapes[geom["shape"].as_u64().unwrap() as usize][kind];
+        let (_, r, _) = n.transform().decomposed();
+        let q = DQuat::from_xyzw(r[0] as f64, r[1] as f64, r[2] as f64, r[3] as f64);
         match v.shape {
             Shape::Obb => {
-                let size = &shapes[geom["shape"].as_u64().unwrap() as usize]["box"]["size"];
+                let size = &shape("box")["size"];
                 for j in 0..3 {
                     assert!(close(size[j].as_f64().unwrap(), 2.0 * v.radii[j], 1e-6));
+                }
+            }
+            Shape::Sphere => {
+                assert!(close(
+                    shape("sphere")["radius"].as_f64().unwrap(),
+                    v.radius(),
+                    1e-6
+                ));
+            }
+            Shape::Capsule | Shape::Cylinder => {
+                let name = v.shape.as_str();
+                let c = shape(name);
+                assert_eq!(
+                    shapes[geom["shape"].as_u64().unwrap() as usize]["type"],
+                    name
+                );
+                // Along the node's Y; height: the segment (capsule) or the whole (cylinder).
+                assert!((q * DVec3::Y - v.axis()).length() < 1e-6);
+                assert!(close(
+                    c["height"].as_f64().unwrap(),
+                    2.0 * v.half_length(),
+                    1e-6
+                ));
+                for key in ["radiusTop", "radiusBottom"] {
+                    assert!(close(c[key].as_f64().unwrap(), v.radius(), 1e-6));
+                }
+            }
+            Shape::Hull => {
+                assert_eq!(geom["convexHull"], true);
+                let hull = g
+                    .nodes()
+                    .nth(geom["node"].as_u64().unwrap() as usize)
+                    .unwrap();
+                let prim = hull.mesh().unwrap().primitives().next().unwrap();
+                let data = g.blob.as_deref().unwrap();
+                let p: Vec<DVec3> = prim
+                    .reader(|_| Some(data))
+                    .read_positions()
+                    .unwrap()
+                    .map(|p| DVec3::from_array(p.map(f64::from)))
+                    .collect();
+                // The hull's own vertices, around the collider node's translation.
+                let want = v.hull_points();
+                assert_eq!(p.len(), want.len());
+                for (a, b) in p.iter().zip(&want) {
+                    assert!((*a + v.center - *b).length() < 1e-5);
                 }
             }
             Shape::Ellipsoid => {
@@ -180,6 +270,11 @@ fn mjcf_has_one_geom_per_volume_with_exact_sizes() {
         .filter(|n| n.has_tag_name("geom"))
         .collect();
     assert_eq!(geoms.len(), seg.parts.len());
+    let meshes: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("mesh"))
+        .collect();
+    assert_eq!(meshes.len(), 1);
     for (g, p) in geoms.iter().zip(&seg.parts) {
         let v = &p.volume;
         let nums = |a: &str| -> Vec<f64> {
@@ -189,20 +284,42 @@ fn mjcf_has_one_geom_per_volume_with_exact_sizes() {
                 .map(|x| x.parse().unwrap())
                 .collect()
         };
-        assert_eq!(
-            g.attribute("type"),
-            Some(if v.shape == Shape::Obb {
-                "box"
-            } else {
-                "ellipsoid"
-            })
-        );
-        assert_eq!(nums("size"), v.radii.to_array());
+        let want = match v.shape {
+            Shape::Obb => "box",
+            Shape::Hull => "mesh",
+            s => s.as_str(),
+        };
+        assert_eq!(g.attribute("type"), Some(want));
+        assert!(g.parent().unwrap().has_tag_name("body"));
+        if v.shape == Shape::Hull {
+            // The mesh asset lists the hull's vertices in the body's frame.
+            let name = g.attribute("mesh").unwrap();
+            let m = meshes
+                .iter()
+                .find(|m| m.attribute("name") == Some(name))
+                .unwrap();
+            let xyz: Vec<f64> = m
+                .attribute("vertex")
+                .unwrap()
+                .split_whitespace()
+                .map(|x| x.parse().unwrap())
+                .collect();
+            let want: Vec<f64> = v.hull_points().iter().flat_map(|p| p.to_array()).collect();
+            assert_eq!(xyz, want);
+            continue;
+        }
+        let size = match v.shape {
+            Shape::Sphere => vec![v.radius()],
+            Shape::Capsule | Shape::Cylinder => vec![v.radius(), v.half_length()],
+            _ => v.radii.to_array().to_vec(),
+        };
+        assert_eq!(nums("size"), size);
         assert_eq!(nums("pos"), v.center.to_array());
         let q = nums("quat");
         let q = DQuat::from_xyzw(q[1], q[2], q[3], q[0]);
         assert!((q * DVec3::X - v.axes.x_axis).length() < 1e-12);
-        assert!(g.parent().unwrap().has_tag_name("body"));
+        // MuJoCo's capsules and cylinders run along the geom's Z.
+        assert!((q * DVec3::Z - v.axes.z_axis).length() < 1e-12);
     }
 }
 
@@ -219,9 +336,13 @@ fn obj_proxies_are_one_object_per_part() {
         assert_eq!(l.report.open_edges, 0);
         let (vol, exact) = (l.report.volume, p.volume.volume());
         match p.volume.shape {
-            Shape::Obb => assert!(close(vol, exact, 1e-9)),
-            // The inscribed UV sphere is a little smaller than the ellipsoid.
-            Shape::Ellipsoid => assert!(vol < exact && vol > 0.95 * exact, "{vol} vs {exact}"),
+            Shape::Obb | Shape::Hull => assert!(close(vol, exact, 1e-9), "{vol} vs {exact}"),
+            // The inscribed meshes of the curved kinds are a little smaller than the solids.
+            _ => assert!(
+                vol < exact && vol > 0.95 * exact,
+                "{:?}: {vol} vs {exact}",
+                p.volume.shape
+            ),
         }
     }
 }

@@ -33,9 +33,11 @@ pub enum VerifyError {
     /// The volumes document breaks the `bvseg.volumes` schema.
     #[error("invalid volumes document: {0}")]
     Document(String),
-    /// The volumes document is valid `bvseg.volumes/2` but lists a shape that this verifier
-    /// cannot check yet (sphere, capsule, cylinder or convex hull).
-    #[error("volume {index}: shape \"{shape}\" is not supported by the verifier yet (it checks ellipsoids and obbs)")]
+    /// A volume of a shape that this verifier cannot check. Not returned by this version:
+    /// it checks every shape of `bvseg.volumes/2`, and [`crate::Volumes::from_json`]
+    /// refuses unknown shape names as [`VerifyError::Document`]. Kept so that code matching
+    /// on it still compiles.
+    #[error("volume {index}: shape \"{shape}\" is not supported by the verifier")]
     UnsupportedShape {
         /// Index of the volume in the document.
         index: usize,

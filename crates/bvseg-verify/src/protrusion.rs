@@ -185,7 +185,7 @@ impl Buckets {
 
 /// Squared distance from `p` to triangle `[a, b, c]`: the nearest of the plane's foot (when
 /// inside the triangle) and the three edges.
-fn triangle_distance_squared(p: DVec3, [a, b, c]: [DVec3; 3]) -> f64 {
+pub(crate) fn triangle_distance_squared(p: DVec3, [a, b, c]: [DVec3; 3]) -> f64 {
     let seg = |u: DVec3, v: DVec3| {
         let d = v - u;
         let l = d.length_squared();
@@ -226,7 +226,7 @@ mod tests {
         // points get close to that near the corners.
         let (v, t) = cuboid(DVec3::ZERO, DVec3::ONE, DMat3::IDENTITY);
         let mesh = MeshRef::new(&v, &t).unwrap();
-        let b = |h: f64| Vol::new(&obb(DVec3::ZERO, DVec3::splat(h), DMat3::IDENTITY));
+        let b = |h: f64| Vol::new(&obb(DVec3::ZERO, DVec3::splat(h), DMat3::IDENTITY)).unwrap();
         let vols = [b(1.2)];
         let (p, n) = protrusion(&mesh, &vols, 20_000, 1, 2);
         let want = 0.2 * 3f64.sqrt();

@@ -100,6 +100,91 @@ pub(crate) fn obb(c: DVec3, half: DVec3, rot: DMat3) -> Volume {
     }
 }
 
+/// A ball volume.
+pub(crate) fn sphere(c: DVec3, radius: f64) -> Volume {
+    Volume::Sphere {
+        center: c.to_array(),
+        radius,
+    }
+}
+
+/// A capsule volume about `axis` (normalised here).
+pub(crate) fn capsule(c: DVec3, axis: DVec3, half_length: f64, radius: f64) -> Volume {
+    Volume::Capsule {
+        center: c.to_array(),
+        axis: axis.normalize().to_array(),
+        half_length,
+        radius,
+    }
+}
+
+/// A cylinder volume about `axis` (normalised here).
+pub(crate) fn cylinder(c: DVec3, axis: DVec3, half_length: f64, radius: f64) -> Volume {
+    Volume::Cylinder {
+        center: c.to_array(),
+        axis: axis.normalize().to_array(),
+        half_length,
+        radius,
+    }
+}
+
+/// A hull volume of `points`.
+pub(crate) fn hull_volume(points: &[DVec3]) -> Volume {
+    Volume::Hull {
+        points: points.iter().map(|p| p.to_array()).collect(),
+    }
+}
+
+/// A closed surface of revolution about z: `profile` lists `(rho, z)` from the bottom pole
+/// (rho = 0) to the top pole (rho = 0), `n` segments around, facing outward; then rotated by
+/// `rot` and moved to `c`.
+pub(crate) fn revolution(profile: &[(f64, f64)], n: usize, c: DVec3, rot: DMat3) -> Arrays {
+    let m = profile.len() - 2;
+    let place = |p: DVec3| (c + rot * p).to_array();
+    let mut v = vec![place(DVec3::new(0.0, 0.0, profile[0].1))];
+    for &(rho, z) in &profile[1..=m] {
+        for s in 0..n {
+            let ph = std::f64::consts::TAU * s as f64 / n as f64;
+            v.push(place(DVec3::new(rho * ph.cos(), rho * ph.sin(), z)));
+        }
+    }
+    v.push(place(DVec3::new(0.0, 0.0, profile[m + 1].1)));
+    let top = (v.len() - 1) as u32;
+    let ring = |r: usize, s: usize| (1 + r * n + s % n) as u32;
+    let mut t = Vec::new();
+    for s in 0..n {
+        t.push([0, ring(0, s + 1), ring(0, s)]);
+        t.push([top, ring(m - 1, s), ring(m - 1, s + 1)]);
+    }
+    for r in 0..m - 1 {
+        for s in 0..n {
+            t.push([ring(r, s), ring(r, s + 1), ring(r + 1, s + 1)]);
+            t.push([ring(r, s), ring(r + 1, s + 1), ring(r + 1, s)]);
+        }
+    }
+    (v, t)
+}
+
+/// A capsule about the z axis of `rot`, centred at `c`: half length `h`, radius `r`, with
+/// `rings` latitude steps per hemisphere and `n` segments around; every vertex on the
+/// capsule's surface.
+pub(crate) fn capsule_mesh(c: DVec3, rot: DMat3, h: f64, r: f64, rings: usize, n: usize) -> Arrays {
+    let mut profile = Vec::new();
+    let quarter = std::f64::consts::FRAC_PI_2;
+    for k in 0..=rings {
+        let phi = -quarter + quarter * k as f64 / rings as f64;
+        profile.push((r * phi.cos(), -h + r * phi.sin()));
+    }
+    for k in 0..=rings {
+        let phi = quarter * k as f64 / rings as f64;
+        profile.push((r * phi.cos(), h + r * phi.sin()));
+    }
+    profile[0].0 = 0.0;
+    let last = profile.len() - 1;
+    profile[last].0 = 0.0;
+    revolution(&profile, n, c, rot)
+}
+
 /// SplitMix64: a tiny deterministic random source.
 pub(crate) struct SplitMix(u64);
 

@@ -9,6 +9,7 @@
 //!   [`budget`] sizes each frame's share of the work.
 //! - [`meshes`]: the bundled sample meshes and the one function that turns file bytes into a mesh.
 //! - [`scene`], [`camera`], [`render`]: the 3D view (CPU geometry, orbit camera, glow renderer).
+//! - [`kinds`]: the volume kinds a run may use (the controls' presets, names, part sizes).
 //! - [`plot`]: TOV and MOV against k.
 //! - [`platform`]: what differs between native and web (reporting, files).
 #![warn(missing_docs)]
@@ -16,6 +17,7 @@
 pub mod app;
 pub mod budget;
 pub mod camera;
+pub mod kinds;
 pub mod meshes;
 pub mod platform;
 pub mod plot;

@@ -1,8 +1,10 @@
-//! The native viewer: `bvseg-viewer [--run] [MESH]`.
+//! The native viewer: `bvseg-viewer [--run] [--bv KINDS] [MESH]`.
 //!
 //! Without `MESH`, the bundled bunny is shown. `--run` starts a run with the default settings
-//! right away and prints its summary (JSON) on stdout when it ends. A mesh that cannot be
-//! read is a one-line error naming the file, with exit status 2, before any window opens.
+//! right away and prints its summary (JSON) on stdout when it ends. `--bv` sets the kinds of
+//! volume to start with, as the CLI's `--bv` (`obb,capsule`, `mixed`) or `--target` (`parry`,
+//! `mujoco-hull`) take them. A mesh that cannot be read, or kinds that do not parse, are a
+//! one-line error (naming the file), with exit status 2, before any window opens.
 
 #[cfg(not(target_arch = "wasm32"))]
 fn main() -> std::process::ExitCode {
@@ -20,11 +22,14 @@ mod native {
 
     use bvseg_viewer::app::{StartMesh, StartOptions, ViewerApp};
     use bvseg_viewer::platform::Report;
-    use bvseg_viewer::{load_mesh_bytes, meshes};
+    use bvseg_viewer::{kinds, load_mesh_bytes, meshes};
 
-    const USAGE: &str = "usage: bvseg-viewer [--run] [MESH]\n\n\
+    const USAGE: &str = "usage: bvseg-viewer [--run] [--bv KINDS] [MESH]\n\n\
         Shows MESH (.obj, .gltf, .glb or .stl), or the bundled bunny, and segments it interactively.\n\
-        --run    start a run with the default settings and print its summary on stdout";
+        --run       start a run right away and print its summary on stdout\n\
+        --bv KINDS  the kinds of volume to start with: a comma list of ellipsoid, obb, sphere,\n\
+        \x20           capsule, cylinder, hull (or mixed), or a target (mujoco, gltf, parry,\n\
+        \x20           physx, usd, primitives; NAME-hull adds hulls)";
 
     fn load(path: &str) -> Result<StartMesh, String> {
         let name = Path::new(path)
@@ -46,13 +51,23 @@ mod native {
     pub fn main() -> ExitCode {
         let mut autorun = false;
         let mut mesh = None;
-        for arg in std::env::args().skip(1) {
+        let mut bv = None;
+        let mut args = std::env::args().skip(1);
+        while let Some(arg) = args.next() {
             match arg.as_str() {
                 "-h" | "--help" => {
                     println!("{USAGE}");
                     return ExitCode::SUCCESS;
                 }
                 "--run" => autorun = true,
+                "--bv" => match args.next() {
+                    Some(v) => bv = Some(v),
+                    None => {
+                        eprintln!("bvseg-viewer: error: --bv needs a value (see --help)");
+                        return ExitCode::from(2);
+                    }
+                },
+                a if a.starts_with("--bv=") => bv = Some(a["--bv=".len()..].to_string()),
                 a if a.starts_with('-') => {
                     eprintln!("bvseg-viewer: error: unknown option {a} (see --help)");
                     return ExitCode::from(2);
@@ -63,6 +78,10 @@ mod native {
                     return ExitCode::from(2);
                 }
             }
+        }
+        if let Some(Err(e)) = bv.as_deref().map(kinds::parse_kinds) {
+            eprintln!("bvseg-viewer: error: --bv: {e}");
+            return ExitCode::from(2);
         }
         let start_mesh = match mesh {
             Some(p) => match load(&p) {
@@ -77,6 +96,7 @@ mod native {
         let start = StartOptions {
             mesh: start_mesh,
             autorun,
+            kinds: bv,
             reporter: Some(Box::new(|r: &Report| match r {
                 Report::Done(json) => println!("{json}"),
                 Report::Error(e) => eprintln!("bvseg-viewer: error: {e}"),

@@ -82,6 +82,10 @@ mod web {
     }
 
     /// Offers `contents` as a file download named `name`.
+    ///
+    /// # Errors
+    ///
+    /// What the browser refused (no document, no blob URL), as one line.
     pub fn download(name: &str, mime: &str, contents: &[u8]) -> Result<(), String> {
         let window = web_sys::window().ok_or("no window")?;
         let document = window.document().ok_or("no document")?;
@@ -106,6 +110,10 @@ mod web {
 
     /// Opens the browser's file dialog; the chosen file arrives in `inbox`, and `ctx` is asked
     /// to repaint so the app sees it.
+    ///
+    /// # Errors
+    ///
+    /// What the browser refused (no document, no file input), as one line.
     pub fn pick_file(inbox: Inbox, ctx: egui::Context, accept: &str) -> Result<(), String> {
         let document = web_sys::window()
             .and_then(|w| w.document())

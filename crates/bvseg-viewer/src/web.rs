@@ -1,8 +1,10 @@
 //! The browser entry point and the page contract.
 //!
 //! `index.html?mesh=NAME&autorun=1` loads the bundled mesh `NAME` and runs it with the default
-//! settings. When a run ends, its summary (JSON, see [`crate::app::summary_json`]) is written
-//! into `<pre id="bvseg-result">` and `document.title` starts with `bvseg: done`; on an error
+//! settings; `&bv=KINDS` sets the kinds of volume first (a comma list such as `obb,capsule` or
+//! `mixed`, or a target such as `parry` or `mujoco-hull`: see [`crate::kinds::parse_kinds`]).
+//! When a run ends, its summary (JSON, see [`crate::app::summary_json`]) is written into
+//! `<pre id="bvseg-result">` and `document.title` starts with `bvseg: done`; on an error
 //! the title is `bvseg: error: <message>`. Scripts wait for the title, and find the controls
 //! to click with [`widget_rect`].
 use wasm_bindgen::prelude::*;
@@ -47,8 +49,8 @@ pub fn widget_rect(label: &str) -> Option<Vec<f32>> {
     crate::platform::widget_rect(label).map(|r| r.to_vec())
 }
 
-/// Starts the viewer in the canvas with id `canvas_id`, reading `mesh` and `autorun` from the
-/// page's query string.
+/// Starts the viewer in the canvas with id `canvas_id`, reading `mesh`, `autorun` and `bv` from
+/// the page's query string.
 #[wasm_bindgen]
 pub async fn start(canvas_id: String) -> Result<(), JsValue> {
     let window = web_sys::window().ok_or("no window")?;
@@ -74,6 +76,7 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
     let start = StartOptions {
         mesh: StartMesh::Bundled(mesh),
         autorun,
+        kinds: query.get("bv"),
         reporter: Some(Box::new(report)),
     };
     runner

@@ -44,4 +44,15 @@ fn usage_errors_and_help() {
     let (code, out, _) = viewer(&["--help"]);
     assert_eq!(code, 0);
     assert!(out.contains("usage: bvseg-viewer"), "{out}");
+    assert!(
+        out.contains("--bv KINDS") && out.contains("NAME-hull"),
+        "{out}"
+    );
+    // Kinds that do not parse stop the viewer before its window opens.
+    for args in [&["--bv", "torus"][..], &["--bv=obb,torus"], &["--bv"]] {
+        let (code, _, err) = viewer(args);
+        assert_eq!(code, 2, "{args:?}");
+        assert!(err.starts_with("bvseg-viewer: error: --bv"), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
 }

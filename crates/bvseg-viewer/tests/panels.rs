@@ -5,7 +5,7 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use bvseg_core::{BoundingKind, Shape};
+use bvseg_core::{Kinds, Params, Shape, Target};
 use bvseg_viewer::app::{Export, StartMesh, StartOptions, Status, ViewerApp};
 use bvseg_viewer::platform::Report;
 use eframe::egui::accesskit::Role;
@@ -18,6 +18,7 @@ fn harness(mesh: &str) -> (Harness<'static, ViewerApp>, Rc<RefCell<Vec<Report>>>
     let app = ViewerApp::new(StartOptions {
         mesh: StartMesh::Bundled(mesh.into()),
         autorun: false,
+        kinds: None,
         reporter: Some(Box::new(move |r: &Report| {
             sink.borrow_mut().push(r.clone())
         })),
@@ -54,14 +55,19 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     let (mut h, reports) = harness("fourleg_2");
     h.run_steps(2);
     assert_eq!(h.state().mesh_name(), Some("fourleg_2.obj"));
-    h.get_by_label("Boxes").click();
+    // Boxes only: untick the other kinds of the default.
+    for label in ["Ellipsoids", "Spheres", "Capsules", "Cylinders"] {
+        h.get_by_label(label).click();
+        h.run_steps(1);
+    }
     h.get_by_label("Fixed k").click();
     h.run_steps(2);
     enter(&mut h, "k", "5");
     enter(&mut h, "Samples", "4000");
     enter(&mut h, "Seed", "7");
     let s = h.state().settings().clone();
-    assert_eq!(s.bounding, BoundingKind::Obb);
+    assert_eq!(s.kinds, Kinds::OBB);
+    assert_eq!(s.params().kinds, Kinds::OBB);
     assert!(s.fixed_k);
     assert_eq!((s.k, s.samples, s.seed), (5, 4000, 7));
 
@@ -74,6 +80,11 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     assert_eq!(res.metrics.k, 5);
     assert!(res.parts.iter().all(|p| p.volume.shape == Shape::Obb));
     assert!(res.metrics.samples > 3000 && res.metrics.samples < 5000);
+
+    // The statistics name the run's kinds, the parts table each part's shape and size.
+    h.get_by_label("Kinds");
+    assert!(!h.query_all_by_label("obb").collect::<Vec<_>>().is_empty());
+    h.get_by_label("5 obb");
 
     // The reporter got the page's summary for this run.
     let last = reports.borrow().last().cloned();
@@ -146,6 +157,128 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
         h.state().result().unwrap().triangle_parts.len()
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_kinds_control_sets_the_runs_kinds() {
+    let (mut h, _) = harness("bunny");
+    h.run_steps(2);
+    // The default is the core's.
+    let s = h.state().settings().clone();
+    assert_eq!(s.kinds, Params::default().kinds);
+    assert_eq!(s.kinds, Kinds::PRIMITIVES);
+    assert_eq!(
+        s.params(),
+        Params::default(),
+        "the default settings are the core's defaults"
+    );
+    assert!(
+        h.query_by_label("Max hull vertices").is_none(),
+        "no hulls, no slider"
+    );
+    assert_eq!(preset_shown(&h), "primitives (default)");
+
+    // Ticking hulls adds them and shows their vertex limit.
+    h.get_by_label("Hulls").click();
+    h.run_steps(2);
+    let p = h.state().settings().params();
+    assert_eq!(p.kinds, Kinds::PRIMITIVES.with(Shape::Hull));
+    assert_eq!(p.max_hull_vertices, 32);
+    assert_eq!(preset_shown(&h), "primitives + hull");
+    h.get_by_label("Max hull vertices").focus();
+    h.run_steps(1);
+    for _ in 0..3 {
+        h.get_by_label("Max hull vertices")
+            .press_keys(&[Key::ArrowRight]);
+        h.run_steps(1);
+    }
+    assert_eq!(h.state().settings().params().max_hull_vertices, 35);
+
+    // A preset replaces the set.
+    choose_preset(&mut h, "gltf / parry / physx / usd");
+    assert_eq!(h.state().settings().params().kinds, Target::Parry.kinds());
+    assert!(h.query_by_label("Max hull vertices").is_none());
+    choose_preset(&mut h, "paper: ellipsoid");
+    assert_eq!(h.state().settings().params().kinds, Kinds::ELLIPSOID);
+
+    // The only kind ticked stays ticked.
+    h.get_by_label("Ellipsoids").click();
+    h.run_steps(2);
+    assert_eq!(h.state().settings().kinds, Kinds::ELLIPSOID);
+    h.get_by_label("Boxes").click();
+    h.run_steps(2);
+    assert_eq!(h.state().settings().params().kinds, Kinds::MIXED);
+    assert_eq!(preset_shown(&h), "custom");
+    h.get_by_label("Ellipsoids").click();
+    h.run_steps(2);
+    assert_eq!(h.state().settings().params().kinds, Kinds::OBB);
+    choose_preset(&mut h, "mujoco + hull");
+    let k = h.state().settings().params().kinds;
+    assert_eq!(k, Target::Mujoco.kinds().with(Shape::Hull));
+    assert!(Shape::ALL.into_iter().all(|s| k.contains(s)));
+
+    // Settings made in code map the same way.
+    let mut s = bvseg_viewer::Settings::default();
+    s.set_kind(Shape::Obb, false);
+    s.set_kind(Shape::Hull, true);
+    s.max_hull_vertices = 64;
+    let p = s.params();
+    let expect: Kinds = "ellipsoid,sphere,capsule,cylinder,hull".parse().unwrap();
+    assert_eq!((p.kinds, p.max_hull_vertices), (expect, 64));
+    assert!(p.validate().is_ok());
+}
+
+/// The preset combo's text.
+fn preset_shown(h: &Harness<'_, ViewerApp>) -> String {
+    let combo = h.get_by_role_and_label(Role::ComboBox, "Preset");
+    combo.value().unwrap_or_default()
+}
+
+/// Opens the preset combo and picks `name`.
+fn choose_preset(h: &mut Harness<'_, ViewerApp>, name: &str) {
+    // A click toggles the menu; egui may still count it open after the last choice.
+    for _ in 0..2 {
+        h.get_by_role_and_label(Role::ComboBox, "Preset").click();
+        h.run_steps(2);
+        if h.query_by_label(name).is_some() {
+            break;
+        }
+    }
+    h.get_by_label(name).click();
+    h.run_steps(2);
+    // The combo names the first preset of the set (mujoco's is the default's).
+    let first = bvseg_viewer::kinds::preset_name(h.state().settings().kinds);
+    assert_eq!(preset_shown(h), first);
+    assert!(
+        name == first || name.starts_with("mujoco"),
+        "{name}: {first}"
+    );
+}
+
+#[test]
+fn the_start_kinds_are_read_as_the_cli_reads_them() {
+    let app = |kinds: &str| {
+        ViewerApp::new(StartOptions {
+            mesh: StartMesh::Bundled("bunny".into()),
+            autorun: true,
+            kinds: Some(kinds.into()),
+            reporter: None,
+        })
+    };
+    assert_eq!(
+        app("obb,capsule").settings().kinds,
+        Kinds::OBB.with(Shape::Capsule)
+    );
+    assert_eq!(app("mixed").settings().kinds, Kinds::MIXED);
+    assert_eq!(
+        app("parry-hull").settings().kinds,
+        Target::Parry.kinds().with(Shape::Hull)
+    );
+    let bad = app("torus");
+    let Status::Failed(msg) = bad.status() else {
+        panic!("expected a failure: {:?}", bad.status());
+    };
+    assert!(msg.contains("torus"), "{msg}");
 }
 
 fn result_of<'a>(h: &'a Harness<'_, ViewerApp>) -> &'a bvseg_core::Segmentation {

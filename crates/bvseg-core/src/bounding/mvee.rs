@@ -81,6 +81,7 @@ fn fit(v: &[DVec3], points: &[DVec3], tol: f64, min_radius: f64) -> BoundingVolu
         center: c,
         axes: DMat3::IDENTITY,
         radii: DVec3::splat(min_r),
+        polytope: None,
     };
     if v.is_empty() {
         return sphere(DVec3::ZERO);
@@ -232,6 +233,7 @@ impl SubFit {
             center: f.origin + f.rot * cy,
             axes: if ok { axes } else { f.rot },
             radii: if ok { radii } else { DVec3::splat(min_r) },
+            polytope: None,
         }
     }
 }
@@ -986,6 +988,7 @@ pub(crate) mod tests {
             center: m,
             axes,
             radii: vals.map(f64::sqrt),
+            polytope: None,
         }
         .scaled_to_contain(pts.iter().copied())
     }

@@ -67,6 +67,7 @@ pub fn box_in_frame(axes: DMat3, points: &[DVec3], min_r: f64) -> BoundingVolume
         center: axes * mid,
         axes,
         radii: half.max(DVec3::splat(min_r)),
+        polytope: None,
     }
     .scaled_to_contain(points.iter().copied())
 }

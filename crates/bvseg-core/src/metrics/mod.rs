@@ -44,38 +44,76 @@ pub struct Outside {
     pub mov: f64,
 }
 
-/// The range of `t` with `|a + t b| <= 1` for the ellipsoid (`|.|` Euclidean) or box (`|.|`
-/// max norm), or `None`.
+/// The range of `k` with `a + k b` (local coordinates) inside the unit shape of `v`, or
+/// `None`.
 #[inline]
-fn interval(shape: Shape, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
-    match shape {
-        Shape::Ellipsoid => {
-            let bb = b.length_squared();
-            let ab = a.dot(b);
-            let disc = ab * ab - bb * (a.length_squared() - 1.0);
-            if disc < 0.0 || bb <= 0.0 {
-                return None;
-            }
-            let r = disc.sqrt();
-            Some(((-ab - r) / bb, (-ab + r) / bb))
-        }
-        Shape::Obb => {
-            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-            for j in 0..3 {
-                if b[j].abs() < 1e-300 {
-                    if a[j].abs() > 1.0 {
-                        return None;
-                    }
-                } else {
-                    let t0 = (-1.0 - a[j]) / b[j];
-                    let t1 = (1.0 - a[j]) / b[j];
-                    lo = lo.max(t0.min(t1));
-                    hi = hi.min(t0.max(t1));
-                }
-            }
+fn interval(v: &BoundingVolume, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
+    match v.shape {
+        Shape::Ellipsoid | Shape::Sphere => quadratic(a, b, DVec3::ONE),
+        Shape::Obb => slabs(a, b, [true; 3]),
+        Shape::Cylinder => {
+            let (l0, h0) = quadratic(a, b, DVec3::new(1.0, 1.0, 0.0))?;
+            let (l1, h1) = slabs(a, b, [false, false, true])?;
+            let (lo, hi) = (l0.max(l1), h0.min(h1));
             (lo <= hi).then_some((lo, hi))
         }
+        Shape::Capsule => {
+            // The middle cylinder and the two end balls (radius 1 across, 1 / l along in
+            // the local scale); the capsule is convex, so their union is one interval.
+            let l = v.radii.z / v.radii.x;
+            let w = DVec3::new(1.0, 1.0, l * l);
+            let mid = interval(
+                &BoundingVolume {
+                    shape: Shape::Cylinder,
+                    ..v.clone()
+                },
+                a,
+                b,
+            );
+            let ends = [1.0, -1.0].map(|s| quadratic(a - DVec3::new(0.0, 0.0, s), b, w));
+            mid.into_iter()
+                .chain(ends.into_iter().flatten())
+                .reduce(|x, y| (x.0.min(y.0), x.1.max(y.1)))
+        }
+        Shape::Hull => v.polytope().and_then(|p| p.interval(a, b)),
     }
+}
+
+/// The range of `k` with `sum_j w_j (a_j + k b_j)^2 <= 1`, or `None` (also when the line runs
+/// along a direction the weights ignore and the rest is inside: the caller bounds it).
+#[inline]
+fn quadratic(a: DVec3, b: DVec3, w: DVec3) -> Option<(f64, f64)> {
+    let bb = (b * b * w).element_sum();
+    let ab = (a * b * w).element_sum();
+    let aa = (a * a * w).element_sum();
+    if bb <= 0.0 {
+        return (aa <= 1.0).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let disc = ab * ab - bb * (aa - 1.0);
+    if disc < 0.0 {
+        return None;
+    }
+    let r = disc.sqrt();
+    Some(((-ab - r) / bb, (-ab + r) / bb))
+}
+
+/// The range of `k` with `|a_j + k b_j| <= 1` for the coordinates `j` that `which` names.
+#[inline]
+fn slabs(a: DVec3, b: DVec3, which: [bool; 3]) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for j in (0..3).filter(|&j| which[j]) {
+        if b[j].abs() < 1e-300 {
+            if a[j].abs() > 1.0 {
+                return None;
+            }
+        } else {
+            let t0 = (-1.0 - a[j]) / b[j];
+            let t1 = (1.0 - a[j]) / b[j];
+            lo = lo.max(t0.min(t1));
+            hi = hi.min(t0.max(t1));
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
 }
 
 /// Number of lattices the outside volume is counted on.
@@ -200,7 +238,7 @@ fn columns_in(
     for j in j0..=j1 {
         for i in i0..=i1 {
             let a = base + di * i as f64 + dj * j as f64;
-            if let Some((t0, t1)) = interval(v.shape, a, dk) {
+            if let Some((t0, t1)) = interval(v, a, dk) {
                 // A hair of slack so that cells exactly on the boundary count as inside,
                 // matching `BoundingVolume::contains`.
                 let k0 = (t0 - 1e-9).ceil() as i64;
@@ -293,6 +331,89 @@ mod tests {
     use super::*;
     use glam::DMat3;
 
+    /// One volume of every kind, tilted and off-centre.
+    fn every_kind() -> Vec<BoundingVolume> {
+        let axes = DMat3::from_euler(glam::EulerRot::XYZ, 0.4, -0.3, 0.9);
+        let c = DVec3::new(0.13, -0.07, 0.21);
+        let mut hull_pts = Vec::new();
+        for i in 0..9 {
+            let a = i as f64 * 2.4;
+            hull_pts.push(c + DVec3::new(a.cos(), a.sin() * 0.6, (i as f64 / 4.0) - 1.0));
+        }
+        vec![
+            BoundingVolume::frame(Shape::Ellipsoid, c, axes, DVec3::new(1.1, 0.6, 0.4)),
+            BoundingVolume::frame(Shape::Obb, c, axes, DVec3::new(0.9, 0.5, 0.3)),
+            BoundingVolume::sphere(c, 0.8),
+            BoundingVolume::capsule(c, axes.x_axis, 0.7, 0.35),
+            BoundingVolume::capsule(c, axes.y_axis, 0.0, 0.6),
+            BoundingVolume::cylinder(c, axes.z_axis, 0.6, 0.45),
+            BoundingVolume::hull(&hull_pts).unwrap(),
+        ]
+    }
+
+    #[test]
+    fn every_kind_scans_columns_as_its_point_test_says() {
+        let h = 0.05;
+        let g = Grid::from_inside_fn(DVec3::splat(-0.2), DVec3::splat(0.2), h, |p| {
+            p.length() <= 0.2
+        });
+        for v in every_kind() {
+            // The column scan against the inside test at every lattice point of the box.
+            let mut scanned = std::collections::HashSet::new();
+            for_each_cell(&g, &v, |i, j, k| {
+                scanned.insert((i, j, k));
+            });
+            let (lo, hi) = v.aabb();
+            let (l, u) = ((lo - g.origin) / h, (hi - g.origin) / h);
+            let mut brute = std::collections::HashSet::new();
+            for k in (l.z.floor() as i64 - 1)..=(u.z.ceil() as i64 + 1) {
+                for j in (l.y.floor() as i64 - 1)..=(u.y.ceil() as i64 + 1) {
+                    for i in (l.x.floor() as i64 - 1)..=(u.x.ceil() as i64 + 1) {
+                        let p = g.origin + DVec3::new(i as f64, j as f64, k as f64) * h;
+                        let inside = v.contains(p);
+                        assert_eq!(inside, v.gauge(p) <= 1.0 + 1e-9, "{:?} at {p}", v.shape);
+                        if inside {
+                            brute.insert((i, j, k));
+                        }
+                    }
+                }
+            }
+            let diff = scanned.symmetric_difference(&brute).count();
+            // Points within round-off of the boundary may go either way.
+            assert!(
+                diff <= 2,
+                "{:?}: {diff} cells differ of {}",
+                v.shape,
+                brute.len()
+            );
+            // The count is the volume.
+            let vol = brute.len() as f64 * h * h * h;
+            assert!(
+                (vol / v.volume() - 1.0).abs() < 0.03,
+                "{:?}: {vol} vs {}",
+                v.shape,
+                v.volume()
+            );
+            // The box holds the boundary, and scaling divides the gauge.
+            let p = v.center + DVec3::new(0.3, -0.2, 0.5);
+            let mut big = v.clone();
+            big.radii *= 2.0;
+            assert!((big.gauge(p) * 2.0 - v.gauge(p)).abs() < 1e-9 * v.gauge(p).max(1.0));
+            let g2 = v.clone().grown(0.1);
+            for t in [DVec3::X, DVec3::Y, DVec3::Z, -DVec3::ONE.normalize()] {
+                // A point 0.1 out from the boundary along a ray from the centre is in the
+                // grown volume.
+                let g0 = v.gauge(v.center + t);
+                let q = v.center + t / g0;
+                assert!(
+                    g2.contains(q + t.normalize() * 0.0999),
+                    "{:?} grown",
+                    v.shape
+                );
+            }
+        }
+    }
+
     #[test]
     fn ball_in_cube_outside_volume() {
         // A cube solid [-1, 1]^3 wrapped in its circumscribed ball: TOV = (sqrt 3)^3 pi 4/3 / 8 - 1.
@@ -305,8 +426,9 @@ mod tests {
             center: DVec3::ZERO,
             axes: DMat3::IDENTITY,
             radii: DVec3::splat(3f64.sqrt()),
+            polytope: None,
         };
-        let o = outside_volumes(&g, &[v], &[g.len() as f64]);
+        let o = outside_volumes(&g, std::slice::from_ref(&v), &[g.len() as f64]);
         let expect = 4.0 / 3.0 * std::f64::consts::PI * 3f64.powf(1.5) / 8.0 - 1.0;
         assert!((o.tov - expect).abs() < 0.02, "{} vs {expect}", o.tov);
         assert_eq!(o.tov, o.mov);
@@ -356,10 +478,11 @@ mod tests {
             center: DVec3::ZERO,
             axes: DMat3::IDENTITY,
             radii: DVec3::splat(0.55),
+            polytope: None,
         };
         // 11^3 cell centres in the box, one of them the sample, and 12^3 of the offset
         // lattice (at odd multiples of h / 2), none inside.
-        let o = outside_volumes(&g, &[v, v], &[1.0, 1.0]);
+        let o = outside_volumes(&g, &[v.clone(), v.clone()], &[1.0, 1.0]);
         let cells = 1330.0 + 1728.0;
         assert_eq!(o.ov, vec![cells / 2.0, cells / 2.0]);
         assert_eq!(o.tov, cells / 4.0);

@@ -23,6 +23,12 @@ const ELLIPSOID_SAMPLES: usize = 160;
 /// Grid points per face edge on a box (corners and edges included).
 const BOX_GRID: usize = 6;
 
+/// Points around a cylinder's or capsule's rings.
+const AXIAL_AROUND: usize = 24;
+
+/// Face-grid points of a hull's boundary, about.
+const HULL_SAMPLES: usize = 200;
+
 /// Best samples refined by the pattern search.
 const REFINED: usize = 3;
 
@@ -102,7 +108,7 @@ fn protrusion_by(
     others: &[BoundingVolume],
     dist: impl Fn(DVec3) -> Option<f64>,
 ) -> Option<f64> {
-    let world = |t: Local| v.center + v.axes * (t * v.radii);
+    let world = |t: Local| v.world(t);
     // Only points that count: on the union's boundary and outside the solid.
     let counts = |t: Local| {
         let p = world(t);
@@ -119,7 +125,7 @@ fn protrusion_by(
             f64::NEG_INFINITY
         })
     };
-    let (samples, step) = boundary_samples(v.shape);
+    let (samples, step) = boundary_samples(v);
     let mut scored: Vec<(f64, usize)> = samples
         .iter()
         .enumerate()
@@ -129,15 +135,15 @@ fn protrusion_by(
     scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let mut best = scored.first().map_or(0.0, |s| s.0);
     for &(d, i) in scored.iter().take(REFINED) {
-        best = best.max(refine(v.shape, samples[i], d, step, &value));
+        best = best.max(refine(v, samples[i], d, step, &value));
     }
     (!gave_up.get()).then_some(best)
 }
 
 /// The sample points of a boundary of `shape` in local coordinates, and their spacing there.
-fn boundary_samples(shape: Shape) -> (Vec<Local>, f64) {
-    match shape {
-        Shape::Ellipsoid => {
+fn boundary_samples(v: &BoundingVolume) -> (Vec<Local>, f64) {
+    match v.shape {
+        Shape::Ellipsoid | Shape::Sphere => {
             let n = ELLIPSOID_SAMPLES;
             let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
             let pts = (0..n)
@@ -169,13 +175,84 @@ fn boundary_samples(shape: Shape) -> (Vec<Local>, f64) {
             }
             (pts, 2.0 / (m - 1) as f64)
         }
+        Shape::Cylinder | Shape::Capsule => axial_samples(v),
+        Shape::Hull => hull_samples(v),
     }
+}
+
+/// Samples of a cylinder's or capsule's boundary in local coordinates: rings around the side
+/// (corners included) and, at the ends, flat discs or the end balls' hemispheres.
+fn axial_samples(v: &BoundingVolume) -> (Vec<Local>, f64) {
+    let around = AXIAL_AROUND;
+    let l = v.radii.z / v.radii.x;
+    // Side rings spaced about as the points around are, in units of the radius.
+    let along = ((l * around as f64 / std::f64::consts::PI).ceil() as usize).clamp(2, 4 * around);
+    let mut pts = Vec::new();
+    let ring = |rho: f64, z: f64, pts: &mut Vec<Local>| {
+        for s in 0..around {
+            let (sn, c) = crate::math::sin_cos(std::f64::consts::TAU * s as f64 / around as f64);
+            pts.push(DVec3::new(rho * c, rho * sn, z));
+        }
+    };
+    for i in 0..along {
+        ring(1.0, -1.0 + 2.0 * i as f64 / (along - 1) as f64, &mut pts);
+    }
+    let caps = AXIAL_AROUND / 4;
+    for sign in [-1.0, 1.0] {
+        for i in 0..caps {
+            let f = i as f64 / caps as f64;
+            match v.shape {
+                // Flat discs, rings from the rim in.
+                Shape::Cylinder => ring(1.0 - f, sign, &mut pts),
+                // Hemispheres: latitude rings out to the pole (1 / l per radius along z).
+                _ => {
+                    let th = std::f64::consts::FRAC_PI_2 * (i + 1) as f64 / caps as f64;
+                    let (sn, c) = crate::math::sin_cos(th);
+                    ring(c, sign * (1.0 + sn / l), &mut pts);
+                }
+            }
+        }
+        pts.push(match v.shape {
+            Shape::Cylinder => DVec3::new(0.0, 0.0, sign),
+            _ => DVec3::new(0.0, 0.0, sign * (1.0 + 1.0 / l)),
+        });
+    }
+    (pts, std::f64::consts::TAU / around as f64)
+}
+
+/// Samples of a hull's boundary in local coordinates: its vertices and a grid on every face.
+fn hull_samples(v: &BoundingVolume) -> (Vec<Local>, f64) {
+    let Some(p) = v.polytope() else {
+        return (Vec::new(), 1.0);
+    };
+    let mut pts: Vec<Local> = p.vertices().to_vec();
+    let total: f64 = p
+        .triangles()
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p.vertices()[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let spacing = (total / HULL_SAMPLES as f64).sqrt().max(1e-9);
+    for t in p.triangles() {
+        let [a, b, c] = t.map(|i| p.vertices()[i as usize]);
+        let longest = (b - a).length().max((c - a).length()).max((c - b).length());
+        let m = ((longest / spacing).ceil() as usize).clamp(1, 64);
+        for i in 0..=m {
+            for j in 0..=m - i {
+                let (u, w) = (i as f64 / m as f64, j as f64 / m as f64);
+                pts.push(a + (b - a) * u + (c - a) * w);
+            }
+        }
+    }
+    (pts, spacing)
 }
 
 /// Pattern search on the boundary from `t` (value `d`) with initial step `step`: moves along
 /// the two tangent directions while they increase `value`, halving the step otherwise.
 fn refine(
-    shape: Shape,
+    v: &BoundingVolume,
     mut t: Local,
     mut d: f64,
     mut step: f64,
@@ -185,9 +262,9 @@ fn refine(
         let mut moved = true;
         while moved {
             moved = false;
-            let (e1, e2) = tangents(shape, t);
+            let (e1, e2) = tangents(v.shape, t);
             for dir in [e1, -e1, e2, -e2] {
-                let cand = project(shape, t + dir * step);
+                let cand = project(v, t + dir * step);
                 let dc = value(cand);
                 if dc > d {
                     (t, d, moved) = (cand, dc, true);
@@ -203,7 +280,9 @@ fn refine(
 /// Two directions along the boundary at `t`.
 fn tangents(shape: Shape, t: Local) -> (DVec3, DVec3) {
     match shape {
-        Shape::Ellipsoid => {
+        // Around the direction from the centre: on the curved kinds and the hull's faces a
+        // step across it followed by the projection stays near the boundary.
+        Shape::Ellipsoid | Shape::Sphere | Shape::Cylinder | Shape::Capsule | Shape::Hull => {
             let a = if t.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
             let e1 = t.cross(a).normalize_or_zero();
             (e1, t.cross(e1).normalize_or_zero())
@@ -226,9 +305,17 @@ fn tangents(shape: Shape, t: Local) -> (DVec3, DVec3) {
 }
 
 /// `t` moved back onto the boundary.
-fn project(shape: Shape, t: Local) -> Local {
-    match shape {
-        Shape::Ellipsoid => t.normalize_or_zero(),
+fn project(v: &BoundingVolume, t: Local) -> Local {
+    match v.shape {
+        Shape::Ellipsoid | Shape::Sphere => t.normalize_or_zero(),
+        Shape::Cylinder | Shape::Capsule | Shape::Hull => {
+            let g = v.gauge_local(t);
+            if g > 0.0 && g.is_finite() {
+                t / g
+            } else {
+                DVec3::Z
+            }
+        }
         Shape::Obb => {
             let c = t.clamp(DVec3::splat(-1.0), DVec3::splat(1.0));
             let m = c.abs().max_element();
@@ -274,6 +361,7 @@ mod tests {
             center: DVec3::ZERO,
             axes: DMat3::IDENTITY,
             radii: DVec3::splat(3f64.sqrt()),
+            polytope: None,
         };
         let p = protrusion(&ball, &surface, &grid, &[]);
         assert!((p - (3f64.sqrt() - 1.0)).abs() < 1e-3, "{p}");
@@ -281,6 +369,7 @@ mod tests {
         let b = BoundingVolume {
             shape: Shape::Obb,
             radii: DVec3::splat(1.2),
+            polytope: None,
             ..ball
         };
         let p = protrusion(&b, &surface, &grid, &[]);
@@ -288,6 +377,7 @@ mod tests {
         // Covered by the larger box, the ball adds nothing to the union's boundary.
         let big = BoundingVolume {
             radii: DVec3::splat(2.0),
+            polytope: None,
             ..b
         };
         assert_eq!(protrusion(&ball, &surface, &grid, &[big]), 0.0);
@@ -306,6 +396,7 @@ mod tests {
             center: DVec3::ZERO,
             axes: DMat3::from_rotation_z(0.3),
             radii: DVec3::new(3.0, 1.2, 1.2),
+            polytope: None,
         };
         let p = protrusion(&v, &surface, &grid, &[]);
         assert!((p - 2.0).abs() < 2e-3, "{p}");

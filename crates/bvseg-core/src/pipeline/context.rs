@@ -25,7 +25,13 @@ impl Context {
     /// [`crate::refine::budget`]).
     pub fn new(mesh: &Mesh, solid: Solid, params: &Params, cancel: Cancel) -> Self {
         let budget = [work_budget(&solid), distance_budget(&solid)];
-        let fitter = Fitter::with_budget(mesh, &solid, params.bounding, budget, cancel.clone());
+        let fitter = Fitter::with_budget(
+            mesh,
+            &solid,
+            (params.kinds, params.max_hull_vertices),
+            budget,
+            cancel.clone(),
+        );
         let (lo, hi) = mesh.bbox();
         Self {
             diagonal: (hi - lo).length(),

@@ -60,7 +60,7 @@ fn union_protrusions(ctx: &Context, cur: &State) -> Vec<f64> {
             // Only the volumes that can hold a point of this one's boundary.
             (0..volumes.len())
                 .filter(|&j| j != i)
-                .map(|j| volumes[j])
+                .map(|j| volumes[j].clone())
                 .filter(|o| {
                     let (l, h) = o.aabb();
                     l.cmple(hi).all() && lo.cmple(h).all()
@@ -103,7 +103,7 @@ fn reshaped(ctx: &Context, cur: State) -> State {
     let reach = ctx.fitter.protrusions_of(&ctx.solid, list, &[]);
     for (&i, r) in changed.iter().zip(reach) {
         if r > cur.pr[i].max(bound) {
-            volumes[i] = cur.volumes[i];
+            volumes[i] = cur.volumes[i].clone();
             cells[i] = cur.fits[i].outside.clone();
         }
     }
@@ -118,7 +118,11 @@ fn with_margin(ctx: &Context, cur: State) -> State {
     if margin <= 0.0 {
         return cur;
     }
-    let volumes: Vec<BoundingVolume> = cur.volumes.iter().map(|v| v.grown(margin)).collect();
+    let volumes: Vec<BoundingVolume> = cur
+        .volumes
+        .iter()
+        .map(|v| v.clone().grown(margin))
+        .collect();
     let o = outside_volumes(&ctx.solid.grid, &volumes, &cur.part.counts());
     cur.with_volumes(volumes, o)
 }
@@ -130,7 +134,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
     let n = ctx.solid.len() as f64;
     let parts: Vec<Part> = (0..k)
         .map(|i| Part {
-            volume: cur.volumes[i],
+            volume: cur.volumes[i].clone(),
             fraction: cur.part.parts[i].n / n,
             samples: cur.part.parts[i].n as usize,
             ov: cur.ov[i],
@@ -145,7 +149,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
         ctx.fitter.fit_points(&ctx.solid, p).grown(margin)
     });
     Segmentation {
-        kind: ctx.params.bounding,
+        kinds: ctx.params.kinds,
         parts,
         metrics: Metrics {
             k,

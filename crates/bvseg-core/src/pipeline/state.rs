@@ -36,7 +36,7 @@ impl State {
     /// `part` with the volumes `fits` of protrusions `pr`, measured.
     pub fn measure(part: Partition, fits: Vec<Arc<Fit>>, pr: Vec<f64>) -> Self {
         let counts = part.counts();
-        let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume).collect();
+        let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume.clone()).collect();
         let cells: Vec<&[Cell]> = fits.iter().map(|f| f.outside.as_slice()).collect();
         let o = outside_from_cells(&cells, &counts);
         State {

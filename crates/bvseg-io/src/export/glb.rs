@@ -1,21 +1,25 @@
 //! glTF 2.0 binary output.
 //!
 //! Scene layout, under one root node `bvseg`:
-//! - `part_<i>`: the volume's translation, rotation and non-uniform scale (the radii) on a
-//!   unit sphere (ellipsoid) or the cube [-1, 1]^3 (box), coloured per part; `extras` hold
-//!   the exact parameters.
+//! - `part_<i>`: the volume drawn, coloured per part: a unit sphere (ellipsoid, sphere), the
+//!   cube [-1, 1]^3 (box) or a unit cylinder under the node's translation, rotation and
+//!   non-uniform scale, or a capsule's or hull's own mesh under translation and rotation;
+//!   `extras` hold the exact parameters (as in the JSON file).
 //! - `part_<i>_collider`: translation and rotation only (physics engines want colliders
-//!   unscaled), with a `KHR_physics_rigid_bodies` collider: a `KHR_implicit_shapes` box of
-//!   the exact size for a box; for an ellipsoid, which those extensions cannot express, a
-//!   convex hull of a polyhedron that encloses it (referenced by node, outside the scene, so
-//!   that viewers do not draw it), with the exact ellipsoid in `extras`.
+//!   unscaled), with a `KHR_physics_rigid_bodies` collider: a `KHR_implicit_shapes` sphere,
+//!   box, capsule or cylinder of the exact size (capsules and cylinders along the node's Y,
+//!   as the extension has them); for a hull, a `convexHull` collider over its vertices; for
+//!   an ellipsoid, which those extensions cannot express, a convex hull of a polyhedron that
+//!   encloses it. The hull meshes are referenced by node, outside the scene, so that viewers
+//!   do not draw them; `extras` hold the exact volume.
 //! - `input_mesh` (optional): the segmented mesh with vertex colours by part.
 use bvseg_core::{Mesh, Segmentation, Shape};
 use glam::DVec3;
 use serde_json::{json, Value};
 
 use super::proxy::{
-    enclosing_sphere_hull, part_color, unit_cube, unit_sphere, volume_rotation, UnitMesh,
+    capsule_mesh, enclosing_sphere_hull, hull_mesh, hull_vertices, part_color, unit_cube,
+    unit_cylinder, unit_sphere, volume_rotation, y_up_rotation, UnitMesh,
 };
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -103,7 +107,7 @@ fn vec(v: DVec3) -> [f64; 3] {
 pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
     let mut b = Builder::default();
     // Created on first use, so that a file with one kind of shape has no unused accessors.
-    let (mut sphere, mut cube) = (None, None);
+    let (mut sphere, mut cube, mut cylinder) = (None, None, None);
     let hull = enclosing_sphere_hull(12);
 
     let mut materials = Vec::new();
@@ -125,42 +129,65 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
             },
             "alphaMode": "BLEND", "doubleSided": true
         }));
+        let (rot, scale) = match v.shape {
+            Shape::Capsule | Shape::Cylinder => (y_up_rotation(v), v.radii),
+            Shape::Hull => (glam::DQuat::IDENTITY, DVec3::ONE),
+            _ => (volume_rotation(v), v.radii),
+        };
         let (pos, nrm, idx) = match v.shape {
-            Shape::Ellipsoid => *sphere.get_or_insert_with(|| b.unit(&unit_sphere(32))),
+            Shape::Ellipsoid | Shape::Sphere => {
+                *sphere.get_or_insert_with(|| b.unit(&unit_sphere(32)))
+            }
             Shape::Obb => *cube.get_or_insert_with(|| b.unit(&unit_cube())),
+            Shape::Cylinder => *cylinder.get_or_insert_with(|| b.unit(&unit_cylinder(32))),
+            Shape::Capsule => b.unit(&capsule_mesh(v.radius(), v.half_length(), 32)),
+            Shape::Hull => b.unit(&hull_mesh(v)),
         };
         meshes.push(json!({
             "name": format!("part_{i}"),
             "primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx, "material": i}]
         }));
-        let q = volume_rotation(v);
-        let rotation = [q.x, q.y, q.z, q.w].map(round);
-        let axes = [v.axes.x_axis, v.axes.y_axis, v.axes.z_axis].map(|a| a.to_array());
-        let exact = json!({
-            "shape": v.shape.as_str(),
-            "center": v.center.to_array(),
-            "axes": axes,
-            "radii": v.radii.to_array(),
-            "fraction": part.fraction,
-        });
-        children.push(nodes.len());
-        nodes.push(json!({
+        let rotation = [rot.x, rot.y, rot.z, rot.w].map(round);
+        let mut exact = crate::json::volume_json(v);
+        exact["fraction"] = json!(part.fraction);
+        let mut display = json!({
             "name": format!("part_{i}"),
             "mesh": meshes.len() - 1,
             "translation": vec(v.center),
             "rotation": rotation,
-            "scale": vec(v.radii),
             "extras": exact,
-        }));
+        });
+        match v.shape {
+            // Cylinder meshes are unit ones scaled (radius, half-height, radius) along Y.
+            Shape::Cylinder => display["scale"] = json!(vec(DVec3::new(scale.x, scale.z, scale.x))),
+            Shape::Capsule | Shape::Hull => {}
+            _ => display["scale"] = json!(vec(scale)),
+        }
+        children.push(nodes.len());
+        nodes.push(display);
+        let (r, h) = (round(v.radius()), round(v.radii.z));
+        let mut implicit = |shape: Value| {
+            shapes.push(shape);
+            json!({"shape": shapes.len() - 1})
+        };
         let geometry = match v.shape {
-            Shape::Obb => {
-                shapes.push(json!({"type": "box", "box": {"size": vec(2.0 * v.radii)}}));
-                json!({"shape": shapes.len() - 1})
-            }
-            Shape::Ellipsoid => {
-                let scaled: Vec<DVec3> = hull.positions.iter().map(|&p| p * v.radii).collect();
-                let pa = b.vec3(&scaled, true);
-                let ia = b.indices(&hull.triangles);
+            Shape::Obb => implicit(json!({"type": "box", "box": {"size": vec(2.0 * v.radii)}})),
+            Shape::Sphere => implicit(json!({"type": "sphere", "sphere": {"radius": r}})),
+            // `height` is the distance between the end balls' centres (above 0: a capsule as
+            // short as a ball keeps its tiny segment).
+            Shape::Capsule => implicit(json!({"type": "capsule", "capsule":
+                {"height": round(2.0 * v.radii.z), "radiusTop": r, "radiusBottom": r}})),
+            Shape::Cylinder => implicit(json!({"type": "cylinder", "cylinder":
+                {"height": 2.0 * h, "radiusTop": r, "radiusBottom": r}})),
+            Shape::Ellipsoid | Shape::Hull => {
+                let (points, triangles) = if v.shape == Shape::Hull {
+                    hull_vertices(v)
+                } else {
+                    let scaled = hull.positions.iter().map(|&p| p * v.radii).collect();
+                    (scaled, hull.triangles.clone())
+                };
+                let pa = b.vec3(&points, true);
+                let ia = b.indices(&triangles);
                 meshes.push(json!({
                     "name": format!("part_{i}_hull"),
                     "primitives": [{"attributes": {"POSITION": pa}, "indices": ia}]
@@ -229,7 +256,9 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
         "accessors": b.accessors,
         "bufferViews": b.views,
         "buffers": [{"byteLength": b.bin.len()}],
-        "extras": {"schema": crate::SCHEMA, "kind": seg.kind.as_str(), "k": seg.parts.len(),
+        "extras": {"schema": crate::json::schema_and_kind(seg.parts.iter().map(|p| &p.volume)).0,
+                   "kind": crate::json::schema_and_kind(seg.parts.iter().map(|p| &p.volume)).1,
+                   "kinds": seg.kinds.to_string(), "k": seg.parts.len(),
                    "tov": seg.metrics.tov, "mov": seg.metrics.mov},
     });
     if !shapes.is_empty() {

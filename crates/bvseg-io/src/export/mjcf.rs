@@ -1,6 +1,8 @@
 //! MuJoCo MJCF output: one static body with one geom per volume. MuJoCo has native
-//! ellipsoid and box geoms whose `size` is the semi-axes / half-extents, so the volumes are
-//! written exactly.
+//! ellipsoid, box, sphere, capsule and cylinder geoms (`size`: semi-axes, half-extents,
+//! radius, or radius and half-length along the geom's Z), so those volumes are written
+//! exactly; a hull becomes a mesh asset of its vertices, which MuJoCo collides as their
+//! convex hull, placed by its vertices in the body's frame.
 use std::fmt::Write;
 
 use bvseg_core::{Segmentation, Shape};
@@ -17,38 +19,63 @@ pub fn to_mjcf(seg: &Segmentation, model: &str) -> String {
         "  <!-- {}: {} {} volumes, TOV {} MOV {} -->",
         crate::GENERATOR,
         seg.parts.len(),
-        seg.kind.as_str(),
+        seg.kinds,
         seg.metrics.tov,
         seg.metrics.mov
     );
+    let hulls: Vec<usize> = (0..seg.parts.len())
+        .filter(|&i| seg.parts[i].volume.shape == Shape::Hull)
+        .collect();
+    if !hulls.is_empty() {
+        s.push_str("  <asset>\n");
+        for &i in &hulls {
+            let pts = seg.parts[i].volume.hull_points();
+            let coords: Vec<String> = pts
+                .iter()
+                .map(|p| format!("{} {} {}", p.x, p.y, p.z))
+                .collect();
+            let _ = writeln!(
+                s,
+                "    <mesh name=\"part_{i}_hull\" vertex=\"{}\"/>",
+                coords.join("  ")
+            );
+        }
+        s.push_str("  </asset>\n");
+    }
     s.push_str("  <worldbody>\n");
     // A body without a joint is welded to the world; add a <freejoint/> to let it move.
     let _ = writeln!(s, "    <body name=\"{model}\">");
     for (i, part) in seg.parts.iter().enumerate() {
         let v = &part.volume;
-        let kind = match v.shape {
-            Shape::Ellipsoid => "ellipsoid",
-            Shape::Obb => "box",
+        let [r, g, b] = part_color(i);
+        let rgba = format!("{r:.3} {g:.3} {b:.3} 0.6");
+        if v.shape == Shape::Hull {
+            let _ = writeln!(
+                s,
+                "      <geom name=\"part_{i}\" type=\"mesh\" mesh=\"part_{i}_hull\" rgba=\"{rgba}\"/>"
+            );
+            continue;
+        }
+        let (kind, size) = match v.shape {
+            Shape::Ellipsoid => (
+                "ellipsoid",
+                format!("{} {} {}", v.radii.x, v.radii.y, v.radii.z),
+            ),
+            Shape::Obb => ("box", format!("{} {} {}", v.radii.x, v.radii.y, v.radii.z)),
+            // MuJoCo wants a capsule's half-length above 0.
+            Shape::Sphere => ("sphere", format!("{}", v.radius())),
+            Shape::Capsule if v.half_length() <= 0.0 => ("sphere", format!("{}", v.radius())),
+            Shape::Capsule => ("capsule", format!("{} {}", v.radius(), v.half_length())),
+            Shape::Cylinder | Shape::Hull => {
+                ("cylinder", format!("{} {}", v.radius(), v.half_length()))
+            }
         };
         let q = volume_rotation(v);
-        let [r, g, b] = part_color(i);
         let _ = writeln!(
             s,
-            "      <geom name=\"part_{i}\" type=\"{kind}\" size=\"{} {} {}\" pos=\"{} {} {}\" \
-             quat=\"{} {} {} {}\" rgba=\"{:.3} {:.3} {:.3} 0.6\"/>",
-            v.radii.x,
-            v.radii.y,
-            v.radii.z,
-            v.center.x,
-            v.center.y,
-            v.center.z,
-            q.w,
-            q.x,
-            q.y,
-            q.z,
-            r,
-            g,
-            b
+            "      <geom name=\"part_{i}\" type=\"{kind}\" size=\"{size}\" pos=\"{} {} {}\" \
+             quat=\"{} {} {} {}\" rgba=\"{rgba}\"/>",
+            v.center.x, v.center.y, v.center.z, q.w, q.x, q.y, q.z,
         );
     }
     s.push_str("    </body>\n  </worldbody>\n</mujoco>\n");

@@ -2,7 +2,7 @@
 //! the right. Each frame advances the running [`Session`] by a time budget, then draws.
 use std::sync::{Arc, Mutex};
 
-use bvseg_core::{BoundingKind, Mesh, Params, Segmentation};
+use bvseg_core::{Kinds, Mesh, Params, Segmentation, Shape};
 use eframe::egui;
 use eframe::glow;
 use web_time::Instant;
@@ -21,8 +21,10 @@ mod view;
 /// The controls of a run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
-    /// Bounding-volume kind.
-    pub bounding: BoundingKind,
+    /// The kinds of volume a part may get (never empty: the controls keep one ticked).
+    pub kinds: Kinds,
+    /// Most vertices of a hull volume (used when `kinds` has hulls).
+    pub max_hull_vertices: usize,
     /// Fixed number of parts instead of the tolerance loop.
     pub fixed_k: bool,
     /// The fixed k (when `fixed_k`).
@@ -43,7 +45,8 @@ impl Default for Settings {
     fn default() -> Self {
         let p = Params::default();
         Self {
-            bounding: p.bounding,
+            kinds: p.kinds,
+            max_hull_vertices: p.max_hull_vertices,
             fixed_k: false,
             k: 8,
             tov: p.tov,
@@ -61,13 +64,19 @@ impl Settings {
         Params {
             samples: self.samples,
             seed: self.seed,
-            bounding: self.bounding,
+            kinds: self.kinds,
+            max_hull_vertices: self.max_hull_vertices,
             k: self.fixed_k.then_some(self.k),
             tov: self.tov,
             max_protrusion: self.max_protrusion,
             max_k: self.max_k,
             ..Params::default()
         }
+    }
+
+    /// Ticks (`on`) or unticks the kind `shape`; unticking the only kind ticked does nothing.
+    pub fn set_kind(&mut self, shape: Shape, on: bool) {
+        self.kinds = crate::kinds::toggled(self.kinds, shape, on);
     }
 }
 
@@ -105,8 +114,12 @@ pub enum StartMesh {
 pub struct StartOptions {
     /// The first mesh.
     pub mesh: StartMesh,
-    /// Run with the default settings right away.
+    /// Run right away (with the default settings, or `kinds`).
     pub autorun: bool,
+    /// The kinds of volume to start with instead of the default, by name as
+    /// [`crate::kinds::parse_kinds`] reads it (`obb,capsule`, `mixed`, `parry-hull`, ...): the
+    /// page's `?bv=` and the native `--bv`. A name it cannot read fails the start.
+    pub kinds: Option<String>,
     /// Told when a run ends or fails.
     pub reporter: Option<Reporter>,
 }
@@ -116,6 +129,7 @@ impl Default for StartOptions {
         Self {
             mesh: StartMesh::Bundled(BUNDLED[0].name.to_string()),
             autorun: false,
+            kinds: None,
             reporter: None,
         }
     }
@@ -263,7 +277,17 @@ impl ViewerApp {
                 warnings,
             } => app.set_model(name, mesh, warnings),
         }
-        app.pending_run = start.autorun && app.model.is_some();
+        let mut kinds_ok = true;
+        if let Some(name) = start.kinds {
+            match crate::kinds::parse_kinds(&name) {
+                Ok(k) => app.settings.kinds = k,
+                Err(e) => {
+                    app.fail(format!("bounding volumes {name:?}: {e}"));
+                    kinds_ok = false;
+                }
+            }
+        }
+        app.pending_run = start.autorun && app.model.is_some() && kinds_ok;
         app
     }
 

@@ -1,9 +1,10 @@
 //! The side panels and the menu bar: controls, refinement plot and history, statistics, parts
 //! table, and the ways in and out (bundled meshes, open, save or download).
-use bvseg_core::{BoundingKind, StepKind};
+use bvseg_core::{Shape, StepKind};
 use eframe::egui::{self, Color32, RichText};
 
 use super::{Export, Status, ViewerApp};
+use crate::kinds;
 use crate::meshes::BUNDLED;
 use crate::platform::note_widget;
 use crate::scene::{self, VolumeStyle};
@@ -183,17 +184,7 @@ impl ViewerApp {
         ui.heading("Segmentation");
         ui.add_enabled_ui(idle, |ui| {
             ui.label("Bounding volumes");
-            ui.horizontal_wrapped(|ui| {
-                let s = &mut self.settings;
-                for (kind, label) in [
-                    (BoundingKind::Ellipsoid, "Ellipsoids"),
-                    (BoundingKind::Obb, "Boxes"),
-                    (BoundingKind::Mixed, "Mixed"),
-                ] {
-                    let r = ui.radio_value(&mut s.bounding, kind, label);
-                    note_widget(label, r.rect);
-                }
-            });
+            self.kinds_control(ui);
             ui.horizontal(|ui| {
                 let s = &mut self.settings;
                 for (fixed, label) in [(false, "Tolerances"), (true, "Fixed k")] {
@@ -203,6 +194,17 @@ impl ViewerApp {
             });
             egui::Grid::new("params").num_columns(2).show(ui, |ui| {
                 let s = &mut self.settings;
+                if s.kinds.contains(Shape::Hull) {
+                    labelled(
+                        ui,
+                        "Max hull vertices",
+                        egui::Slider::new(
+                            &mut s.max_hull_vertices,
+                            4..=bvseg_core::MAX_HULL_VERTICES,
+                        )
+                        .step_by(1.0),
+                    );
+                }
                 if s.fixed_k {
                     labelled(ui, "k", egui::DragValue::new(&mut s.k).range(1..=4096));
                 } else {
@@ -284,6 +286,44 @@ impl ViewerApp {
         );
     }
 
+    /// A checkbox per kind (the only one ticked cannot be unticked) and the presets.
+    fn kinds_control(&mut self, ui: &mut egui::Ui) {
+        let s = &mut self.settings;
+        ui.horizontal_wrapped(|ui| {
+            for shape in Shape::ALL {
+                let label = kinds::checkbox_label(shape);
+                let mut on = s.kinds.contains(shape);
+                let last = on && s.kinds.single().is_some();
+                let r = ui
+                    .add_enabled(!last, egui::Checkbox::new(&mut on, label))
+                    .on_disabled_hover_text("A run needs one kind at least");
+                note_widget(label, r.rect);
+                if r.changed() {
+                    s.set_kind(shape, on);
+                }
+            }
+        });
+        let current = kinds::preset_name(s.kinds);
+        let combo = egui::ComboBox::from_label("Preset")
+            .selected_text(current)
+            .show_ui(ui, |ui| {
+                for (name, k) in kinds::presets() {
+                    let r = ui.selectable_label(current == name, name);
+                    note_widget(name, r.rect);
+                    if r.clicked() {
+                        s.kinds = k;
+                    }
+                }
+            });
+        // The preset shown, for screen readers (and the tests).
+        let enabled = ui.is_enabled();
+        combo.response.widget_info(|| egui::WidgetInfo {
+            current_text_value: Some(current.into()),
+            ..egui::WidgetInfo::labeled(egui::WidgetType::ComboBox, enabled, "Preset")
+        });
+        note_widget("Preset", combo.response.rect);
+    }
+
     fn history(&mut self, ui: &mut egui::Ui) {
         ui.heading("Refinement");
         let Some(session) = &self.session else {
@@ -351,6 +391,7 @@ impl ViewerApp {
                 }
 
                 if let Some(s) = &self.session {
+                    row("Kinds", s.params().kinds.to_string());
                     if s.samples() > 0 {
                         row("Samples", s.samples().to_string());
                     }
@@ -381,6 +422,7 @@ impl ViewerApp {
                         mark(st.protrusion / diagonal, tol.map(|t| t.1)) + " × diagonal",
                     );
                     row("MOV", mark(st.mov, None));
+                    row("Shapes", shape_counts(&snap.volumes));
                     if st.kind == StepKind::Backtrack {
                         row("", "rejected split (view: kept state)".into());
                     }
@@ -403,11 +445,12 @@ impl ViewerApp {
             .flatten();
         egui::ScrollArea::vertical().show(ui, |ui| {
             egui::Grid::new("parts")
-                .num_columns(4)
+                .num_columns(5)
                 .striped(true)
                 .show(ui, |ui| {
                     ui.label("");
                     ui.label("shape");
+                    ui.label("size");
                     ui.label("volume");
                     ui.label("OV");
                     ui.end_row();
@@ -423,6 +466,8 @@ impl ViewerApp {
                             self.selected_part = if selected { None } else { Some(i) };
                         }
                         ui.label(v.shape.as_str());
+                        let (size, detail) = kinds::size_text(v);
+                        ui.label(size).on_hover_text(detail);
                         let frac = snap.fractions.get(i).copied().unwrap_or(f64::NAN);
                         ui.label(format!("{:.1} %", 100.0 * frac));
                         ui.label(
@@ -434,6 +479,22 @@ impl ViewerApp {
                     }
                 });
         });
+    }
+}
+
+/// How many volumes of each shape there are, as `2 capsule · 1 obb` (in [`Shape::ALL`]'s order).
+fn shape_counts(volumes: &[bvseg_core::BoundingVolume]) -> String {
+    let counts: Vec<String> = Shape::ALL
+        .into_iter()
+        .filter_map(|shape| {
+            let n = volumes.iter().filter(|v| v.shape == shape).count();
+            (n > 0).then(|| format!("{n} {}", shape.as_str()))
+        })
+        .collect();
+    if counts.is_empty() {
+        "–".into()
+    } else {
+        counts.join(" · ")
     }
 }
 

@@ -1,0 +1,330 @@
+//! Near-minimum-volume capsules and cylinders.
+//!
+//! For a given axis direction the best cylinder and capsule are exact: the points projected
+//! on the plane across the axis have a minimum enclosing circle (the cylinder's radius and
+//! axis line), and their extent along the axis gives the cylinder's height. A capsule around
+//! that line with radius `r >= R` needs the segment `[max_i (z_i - sqrt(r^2 - rho_i^2)),
+//! min_i ...]` read from each point's height `z_i` and distance `rho_i` from the line, and
+//! its radius is found by a one-dimensional search. The direction is searched: seeds are the
+//! principal axes of the points, the direction of their widest pair of extreme points and
+//! the 13 axes of a 26-DOP; the best few are refined by a pattern search on the sphere of
+//! directions with shrinking steps. The search judges a capsule by the one of radius `R`
+//! (one pass over the points instead of a radius search); the best directions then get
+//! their best radius.
+use glam::{DMat3, DVec2, DVec3};
+
+use super::ball::{min_circle_in_order, shuffled};
+use crate::linalg::sym_eigen;
+use crate::volume::BoundingVolume;
+#[cfg(test)]
+use crate::volume::Shape;
+
+/// Seeds refined by the pattern search.
+const REFINED: usize = 2;
+/// First step of the pattern search, in radians.
+const FIRST_STEP: f64 = 0.25;
+/// Halvings of the pattern search's step.
+const HALVINGS: usize = 6;
+/// Radii tried, from the circle's to the enclosing ball's, before the golden-section search.
+const RADII: usize = 12;
+
+/// Which of the two axial shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axial {
+    /// A capsule.
+    Capsule,
+    /// A cylinder.
+    Cylinder,
+}
+
+/// A near-minimum-volume capsule or cylinder holding `points` (finite ones), radius and
+/// half-length at least `min_r` (a capsule's half-length may be 0).
+pub fn min_axial(points: &[DVec3], kind: Axial, min_r: f64) -> BoundingVolume {
+    // One shuffle for all the projections' circles.
+    let p: Vec<DVec3> = shuffled(
+        &points
+            .iter()
+            .copied()
+            .filter(|p| p.is_finite())
+            .collect::<Vec<_>>(),
+    );
+    if p.is_empty() {
+        let unit = match kind {
+            Axial::Capsule => BoundingVolume::capsule(DVec3::ZERO, DVec3::Z, 0.0, min_r),
+            Axial::Cylinder => BoundingVolume::cylinder(DVec3::ZERO, DVec3::Z, min_r, min_r),
+        };
+        return unit;
+    }
+    let seeds = seeds(&p);
+    let quick = |a: DVec3| fit_with(&p, a, kind, min_r, false).volume();
+    let mut scored: Vec<(f64, DVec3)> = seeds.into_iter().map(|a| (quick(a), a)).collect();
+    scored.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut best: Option<BoundingVolume> = None;
+    for &(v0, a0) in scored.iter().take(REFINED) {
+        let (_, a) = refine(a0, v0, quick);
+        let v = fit_along(&p, a, kind, min_r);
+        if best.as_ref().is_none_or(|b| v.volume() < b.volume()) {
+            best = Some(v);
+        }
+    }
+    best.unwrap_or_else(|| fit_along(&p, DVec3::Z, kind, min_r))
+        .scaled_to_contain(p.iter().copied())
+}
+
+/// Pattern search over directions from `a` (volume `v`) for the least `volume`.
+fn refine(mut a: DVec3, mut v: f64, volume: impl Fn(DVec3) -> f64) -> (f64, DVec3) {
+    let mut step = FIRST_STEP;
+    for _ in 0..HALVINGS {
+        let mut moved = true;
+        let mut rounds = 0;
+        while moved && rounds < 8 {
+            moved = false;
+            rounds += 1;
+            let e1 = a.any_orthonormal_vector();
+            let e2 = a.cross(e1);
+            let (s, c) = crate::math::sin_cos(step);
+            for d in [e1, -e1, e2, -e2] {
+                let cand = (a * c + d * s).normalize();
+                let vc = volume(cand);
+                if vc < v * (1.0 - 1e-12) {
+                    (a, v, moved) = (cand, vc, true);
+                    break;
+                }
+            }
+        }
+        step *= 0.5;
+    }
+    (v, a)
+}
+
+/// The seed directions (unit, sign irrelevant).
+fn seeds(p: &[DVec3]) -> Vec<DVec3> {
+    let mut out = Vec::with_capacity(20);
+    let n = p.len() as f64;
+    let mean = p.iter().copied().sum::<DVec3>() / n;
+    let mut cov = DMat3::ZERO;
+    for &q in p {
+        let d = q - mean;
+        cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+    }
+    let (_, vecs) = sym_eigen(cov * (1.0 / n));
+    out.extend([vecs.x_axis, vecs.y_axis, vecs.z_axis]);
+    let dop: [DVec3; 13] = [
+        DVec3::X,
+        DVec3::Y,
+        DVec3::Z,
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(1.0, -1.0, 0.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, -1.0),
+        DVec3::new(0.0, 1.0, 1.0),
+        DVec3::new(0.0, 1.0, -1.0),
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(1.0, 1.0, -1.0),
+        DVec3::new(1.0, -1.0, 1.0),
+        DVec3::new(-1.0, 1.0, 1.0),
+    ];
+    // The widest pair among the extreme points along the 26-DOP's axes.
+    let mut ext = Vec::with_capacity(26);
+    for d in dop {
+        let key = |q: &&DVec3| q.dot(d);
+        if let (Some(lo), Some(hi)) = (
+            p.iter().min_by(|x, y| key(x).total_cmp(&key(y))),
+            p.iter().max_by(|x, y| key(x).total_cmp(&key(y))),
+        ) {
+            ext.extend([*lo, *hi]);
+        }
+    }
+    let mut wide = (0.0, DVec3::Z);
+    for i in 0..ext.len() {
+        for j in i + 1..ext.len() {
+            let d = (ext[j] - ext[i]).length_squared();
+            if d > wide.0 {
+                wide = (d, ext[j] - ext[i]);
+            }
+        }
+    }
+    out.push(wide.1);
+    out.extend(dop);
+    out.into_iter().filter_map(DVec3::try_normalize).collect()
+}
+
+/// The best capsule or cylinder along the unit direction `a`.
+pub fn fit_along(p: &[DVec3], a: DVec3, kind: Axial, min_r: f64) -> BoundingVolume {
+    fit_with(p, a, kind, min_r, true)
+}
+
+/// [`fit_along`], with a capsule's radius searched (`search_radius`) or the axis circle's.
+fn fit_with(p: &[DVec3], a: DVec3, kind: Axial, min_r: f64, search_radius: bool) -> BoundingVolume {
+    let u = a.any_orthonormal_vector();
+    let w = a.cross(u);
+    let flat: Vec<DVec2> = p.iter().map(|&q| DVec2::new(q.dot(u), q.dot(w))).collect();
+    let (c2, circle) = min_circle_in_order(&flat);
+    let big_r = circle.max(min_r);
+    let z: Vec<f64> = p.iter().map(|&q| q.dot(a)).collect();
+    let (zlo, zhi) = z
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    let line = u * c2.x + w * c2.y;
+    match kind {
+        Axial::Cylinder => {
+            let half = (0.5 * (zhi - zlo)).max(min_r);
+            BoundingVolume::cylinder(line + a * (0.5 * (zlo + zhi)), a, half, big_r)
+        }
+        Axial::Capsule if !search_radius => {
+            let (mut z0, mut z1) = (f64::INFINITY, f64::NEG_INFINITY);
+            for (q, &zi) in flat.iter().zip(&z) {
+                let s = (big_r * big_r - (*q - c2).length_squared()).max(0.0).sqrt();
+                z0 = z0.min(zi + s);
+                z1 = z1.max(zi - s);
+            }
+            let half = (0.5 * (z1 - z0)).max(0.0);
+            BoundingVolume::capsule(line + a * (0.5 * (z0 + z1)), a, half, big_r)
+        }
+        Axial::Capsule => {
+            let rho2: Vec<f64> = flat.iter().map(|&q| (q - c2).length_squared()).collect();
+            // The segment [z0, z1] of a capsule of radius r around the line.
+            let segment = |r: f64| {
+                let (mut z0, mut z1) = (f64::INFINITY, f64::NEG_INFINITY);
+                for (&zi, &ri) in z.iter().zip(&rho2) {
+                    let s = (r * r - ri).max(0.0).sqrt();
+                    z0 = z0.min(zi + s);
+                    z1 = z1.max(zi - s);
+                }
+                (z0, z1)
+            };
+            let volume = |r: f64| {
+                let (z0, z1) = segment(r);
+                std::f64::consts::PI * r * r * ((z1 - z0).max(0.0) + 4.0 / 3.0 * r)
+            };
+            // Past the ball around the middle that holds every point, the segment is empty
+            // and the volume only grows.
+            let half = 0.5 * (zhi - zlo);
+            let r_max = (big_r * big_r + half * half).sqrt().max(big_r);
+            let at = |i: usize| {
+                let f = i as f64 / (RADII - 1) as f64;
+                big_r + (r_max - big_r) * f * f
+            };
+            let mut bi = 0;
+            let mut bv = f64::INFINITY;
+            for i in 0..RADII {
+                let v = volume(at(i));
+                if v < bv {
+                    (bi, bv) = (i, v);
+                }
+            }
+            // Golden-section search between the neighbours of the best sample.
+            let (mut lo, mut hi) = (at(bi.saturating_sub(1)), at((bi + 1).min(RADII - 1)));
+            let g = 0.5 * (5f64.sqrt() - 1.0);
+            for _ in 0..30 {
+                let m1 = hi - g * (hi - lo);
+                let m2 = lo + g * (hi - lo);
+                if volume(m1) <= volume(m2) {
+                    hi = m2;
+                } else {
+                    lo = m1;
+                }
+            }
+            let r = if volume(0.5 * (lo + hi)) < bv {
+                0.5 * (lo + hi)
+            } else {
+                at(bi)
+            };
+            let (z0, z1) = segment(r);
+            let (mid, half) = if z1 >= z0 {
+                (0.5 * (z0 + z1), 0.5 * (z1 - z0))
+            } else {
+                (0.5 * (z0 + z1), 0.0)
+            };
+            BoundingVolume::capsule(line + a * mid, a, half, r)
+        }
+    }
+}
+
+/// The exact volume a capsule or cylinder of `shape` needs along `a` (for tests).
+#[cfg(test)]
+fn volume_along(p: &[DVec3], a: DVec3, shape: Shape) -> f64 {
+    let kind = if shape == Shape::Capsule {
+        Axial::Capsule
+    } else {
+        Axial::Cylinder
+    };
+    fit_along(p, a, kind, 1e-12).volume()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    fn limb(seed: u64) -> Vec<DVec3> {
+        let mut r = Rng::new(seed);
+        let rot = DMat3::from_euler(glam::EulerRot::XYZ, 0.3 * seed as f64, 0.7, -0.2);
+        (0..150)
+            .map(|_| {
+                let z = (r.next_f64() - 0.5) * 4.0;
+                let ang = r.next_f64() * std::f64::consts::TAU;
+                let rad = r.next_f64().sqrt() * (0.5 + 0.2 * z.abs());
+                rot * DVec3::new(rad * ang.cos(), rad * ang.sin() * 0.8, z)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn within_two_per_cent_of_a_brute_force_sweep_and_enclosing() {
+        for seed in 0..4 {
+            let p = limb(seed);
+            for (kind, shape) in [
+                (Axial::Capsule, Shape::Capsule),
+                (Axial::Cylinder, Shape::Cylinder),
+            ] {
+                let v = min_axial(&p, kind, 1e-9);
+                assert_eq!(v.shape, shape);
+                assert!(p.iter().all(|&q| v.contains(q)), "{shape:?} misses a point");
+                // Brute force: 4,000 directions of a Fibonacci hemisphere.
+                let n = 4000;
+                let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+                let best = (0..n)
+                    .map(|i| {
+                        let z = 1.0 - (i as f64 + 0.5) / n as f64;
+                        let r = (1.0 - z * z).sqrt();
+                        let t = golden * i as f64;
+                        volume_along(&p, DVec3::new(r * t.cos(), r * t.sin(), z), shape)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    v.volume() <= best * 1.02,
+                    "seed {seed} {shape:?}: {} vs brute force {best}",
+                    v.volume()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_capsule_around_a_capsule_is_that_capsule() {
+        // Points on a capsule's surface: radius 0.5, segment half-length 1 along (1, 1, 0).
+        let a = DVec3::new(1.0, 1.0, 0.0).normalize();
+        let u = a.any_orthonormal_vector();
+        let w = a.cross(u);
+        let mut p = Vec::new();
+        for i in 0..24 {
+            let t = std::f64::consts::TAU * i as f64 / 24.0;
+            let rim = (u * t.cos() + w * t.sin()) * 0.5;
+            for z in [-1.0, 0.0, 1.0] {
+                p.push(a * z + rim);
+            }
+            for j in 1..6 {
+                let th = std::f64::consts::FRAC_PI_2 * j as f64 / 6.0;
+                p.push(a * (1.0 + 0.5 * th.sin()) + rim * th.cos());
+                p.push(a * (-1.0 - 0.5 * th.sin()) + rim * th.cos());
+            }
+        }
+        let v = min_axial(&p, Axial::Capsule, 1e-9);
+        assert!((v.radius() - 0.5).abs() < 1e-3, "{}", v.radius());
+        assert!((v.half_length() - 1.0).abs() < 1e-2, "{}", v.half_length());
+        assert!(v.axis().dot(a).abs() > 0.9999);
+    }
+}

@@ -1,0 +1,313 @@
+//! An enclosing convex polyhedron with few vertices.
+//!
+//! The convex hull of a part's points often has hundreds of vertices (every surface triangle
+//! contributes its corners), while engines take convex meshes of 32 to 255. Dropping hull
+//! vertices would uncover the surface; this cuts corners instead. It starts from the part's
+//! tight oriented box (8 vertices) and clips it, one plane at a time, with the supporting
+//! plane of the hull face that the current polyhedron crosses deepest, while the vertex count
+//! stays within the limit. Every plane supports the hull, so the result always encloses the
+//! points. A clip that would put a new vertex within [`MIN_EDGE`] of the diameter of an
+//! existing one is skipped, so no sliver face or needle edge appears.
+use glam::DVec3;
+
+use super::hull::convex_hull;
+use super::obb::min_obb;
+use crate::volume::BoundingVolume;
+
+/// Shortest edge, relative to the hull's diameter, a clip may create.
+const MIN_EDGE: f64 = 1e-3;
+/// Candidate planes tried per clip, deepest first, before the search stops.
+const TRIES: usize = 8;
+/// Depth, relative to the diameter, below which the polyhedron counts as the hull itself.
+const DONE: f64 = 1e-9;
+
+/// A convex polygon face, counter-clockwise seen from outside.
+type Face = Vec<DVec3>;
+
+/// An enclosing hull of `points` with at most `max_vertices` vertices (at least 8 are
+/// allowed for, a box's), at least `min_r` across in every direction.
+pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> BoundingVolume {
+    let finite: Vec<DVec3> = points.iter().copied().filter(|p| p.is_finite()).collect();
+    let hull = convex_hull(&finite);
+    let obb = min_obb(&finite, min_r);
+    let box_hull = || {
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| {
+                let s = DVec3::new(
+                    if i & 1 == 0 { -1.0 } else { 1.0 },
+                    if i & 2 == 0 { -1.0 } else { 1.0 },
+                    if i & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                obb.world(s)
+            })
+            .collect();
+        BoundingVolume::hull(&corners)
+    };
+    if hull.dim == 3 && hull.vertices.len() <= max_vertices && !has_close_vertices(&hull.vertices) {
+        if let Some(v) = BoundingVolume::hull(&hull.vertices) {
+            return v.scaled_to_contain(finite.iter().copied());
+        }
+    }
+    if hull.dim < 3 || max_vertices < 8 {
+        // Flat parts get the box, which has the thickness `min_r`; a limit below a box's 8
+        // vertices gets the tetrahedron around the box.
+        let b = if max_vertices < 8 {
+            tetrahedron_around(&obb)
+        } else {
+            box_hull()
+        };
+        return b.map_or(obb, |v| v.scaled_to_contain(finite.iter().copied()));
+    }
+    let diameter = 2.0 * obb.radii.length();
+    let planes: Vec<(DVec3, f64)> = (0..hull.faces.len())
+        .filter_map(|f| {
+            let (n, area) = hull.face_normal_area(f);
+            (area > 0.0).then(|| (n, n.dot(hull.vertices[hull.faces[f][0] as usize])))
+        })
+        .collect();
+    let mut faces = box_faces(&obb);
+    let mut used = vec![false; planes.len()];
+    loop {
+        let verts = vertices(&faces, diameter);
+        let mut order: Vec<(f64, usize)> = planes
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| !used[j])
+            .map(|(j, &(n, d))| {
+                let depth = verts
+                    .iter()
+                    .map(|&v| n.dot(v) - d)
+                    .fold(f64::NEG_INFINITY, f64::max);
+                (depth, j)
+            })
+            .filter(|&(depth, _)| depth > DONE * diameter)
+            .collect();
+        if order.is_empty() {
+            break;
+        }
+        order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut clipped = None;
+        for &(_, j) in order.iter().take(TRIES) {
+            used[j] = true;
+            let (n, d) = planes[j];
+            let next = clip(&faces, n, d, diameter);
+            let nv = vertices(&next, diameter);
+            if nv.len() <= max_vertices && nv.len() >= 4 && !has_close_vertices_d(&nv, diameter) {
+                clipped = Some(next);
+                break;
+            }
+        }
+        match clipped {
+            Some(f) => faces = f,
+            None => break,
+        }
+    }
+    let verts = vertices(&faces, diameter);
+    BoundingVolume::hull(&verts)
+        .or_else(box_hull)
+        .map_or(obb, |v| v.scaled_to_contain(finite.iter().copied()))
+}
+
+/// The regular-ish tetrahedron around a box (its four alternate corners pushed out so that
+/// its faces hold the box).
+fn tetrahedron_around(obb: &BoundingVolume) -> Option<BoundingVolume> {
+    // The tetrahedron with vertices at 3 times the alternate corners holds the unit cube:
+    // each face plane sum s_j t_j = -1 (in the unit-corner scale of 3) lies beyond it.
+    let corners: Vec<DVec3> = [
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(1.0, -1.0, -1.0),
+        DVec3::new(-1.0, 1.0, -1.0),
+        DVec3::new(-1.0, -1.0, 1.0),
+    ]
+    .into_iter()
+    .map(|s| obb.world(3.0 * s))
+    .collect();
+    BoundingVolume::hull(&corners)
+}
+
+fn has_close_vertices(v: &[DVec3]) -> bool {
+    let (lo, hi) = v
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &p| {
+            (l.min(p), h.max(p))
+        });
+    has_close_vertices_d(v, (hi - lo).length())
+}
+
+fn has_close_vertices_d(v: &[DVec3], diameter: f64) -> bool {
+    let min2 = (MIN_EDGE * diameter) * (MIN_EDGE * diameter);
+    (0..v.len()).any(|i| (i + 1..v.len()).any(|j| (v[i] - v[j]).length_squared() < min2))
+}
+
+/// The six faces of a box.
+fn box_faces(b: &BoundingVolume) -> Vec<Face> {
+    let c = |sx: f64, sy: f64, sz: f64| b.world(DVec3::new(sx, sy, sz));
+    let mut faces = Vec::with_capacity(6);
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            // Corners of the face in the order of its two free axes, turned to face out.
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let mut f: Face = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .into_iter()
+                .map(|(a, bb)| {
+                    let mut t = [0.0; 3];
+                    t[axis] = sign;
+                    t[u] = a;
+                    t[v] = bb;
+                    c(t[0], t[1], t[2])
+                })
+                .collect();
+            if sign < 0.0 {
+                f.reverse();
+            }
+            faces.push(f);
+        }
+    }
+    faces
+}
+
+/// The distinct vertices of the faces (points closer than a hair of the diameter are one).
+fn vertices(faces: &[Face], diameter: f64) -> Vec<DVec3> {
+    let eps2 = (1e-12 * diameter) * (1e-12 * diameter);
+    let mut out: Vec<DVec3> = Vec::new();
+    for f in faces {
+        for &p in f {
+            if !out.iter().any(|&q| (q - p).length_squared() <= eps2) {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// The polyhedron `faces` cut by the half-space `n . x <= d`.
+fn clip(faces: &[Face], n: DVec3, d: f64, diameter: f64) -> Vec<Face> {
+    let eps = 1e-12 * diameter;
+    let mut out = Vec::with_capacity(faces.len() + 1);
+    let mut cut: Vec<DVec3> = Vec::new();
+    for f in faces {
+        let mut g: Face = Vec::with_capacity(f.len() + 1);
+        for i in 0..f.len() {
+            let (a, b) = (f[i], f[(i + 1) % f.len()]);
+            let (da, db) = (n.dot(a) - d, n.dot(b) - d);
+            if da <= 0.0 {
+                g.push(a);
+            }
+            if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
+                // Computed from the inside end, so both faces of an edge get the same point.
+                let (p, q, dp, dq) = if da < 0.0 {
+                    (a, b, da, db)
+                } else {
+                    (b, a, db, da)
+                };
+                let x = p + (q - p) * (dp / (dp - dq));
+                g.push(x);
+                cut.push(x);
+            } else if da.abs() <= eps && da > 0.0 {
+                cut.push(a);
+            }
+            if da <= 0.0 && da >= -eps {
+                cut.push(a);
+            }
+        }
+        g.dedup_by(|x, y| (*x - *y).length() <= eps);
+        if g.len() >= 3 {
+            out.push(g);
+        }
+    }
+    // The cap: the cut points in counter-clockwise order seen from outside (along n).
+    let mut cap: Vec<DVec3> = Vec::new();
+    for p in cut {
+        if !cap.iter().any(|&q| (q - p).length() <= eps) {
+            cap.push(p);
+        }
+    }
+    if cap.len() >= 3 {
+        let mid = cap.iter().copied().sum::<DVec3>() / cap.len() as f64;
+        let u = n.any_orthonormal_vector();
+        let w = n.cross(u);
+        // By a pseudo-angle (exact arithmetic, the same on every platform, unlike atan2).
+        let angle = |p: DVec3| {
+            let (x, y) = ((p - mid).dot(u), (p - mid).dot(w));
+            let r = x.abs() + y.abs();
+            if r <= 0.0 {
+                return 0.0;
+            }
+            let t = y / r;
+            if x >= 0.0 {
+                t
+            } else {
+                2.0 - t
+            }
+        };
+        cap.sort_by(|a, b| angle(*a).total_cmp(&angle(*b)));
+        out.push(cap);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    fn blob(seed: u64, n: usize) -> Vec<DVec3> {
+        let mut r = Rng::new(seed);
+        (0..n)
+            .map(|_| {
+                let d = DVec3::new(r.next_f64() - 0.5, r.next_f64() - 0.5, r.next_f64() - 0.5)
+                    .normalize();
+                d * DVec3::new(2.0, 1.0, 0.6) * (0.9 + 0.1 * r.next_f64())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn encloses_within_the_vertex_limit_and_beats_the_box() {
+        for seed in 0..6 {
+            let p = blob(seed, 400);
+            let exact = BoundingVolume::hull(&p).unwrap();
+            let obb = min_obb(&p, 1e-9);
+            for max in [8, 12, 32, 64] {
+                let v = few_vertex_hull(&p, max, 1e-9);
+                let verts = v.hull_points();
+                assert!(verts.len() <= max, "{} > {max}", verts.len());
+                assert!(
+                    p.iter().all(|&q| v.contains(q)),
+                    "seed {seed}: a point escapes"
+                );
+                assert!(v.volume() >= exact.volume() * (1.0 - 1e-9));
+                assert!(v.volume() <= obb.volume() * (1.0 + 1e-9));
+                if max >= 32 {
+                    assert!(
+                        v.volume() < 0.8 * obb.volume(),
+                        "seed {seed}, {max} vertices: {} vs box {}",
+                        v.volume(),
+                        obb.volume()
+                    );
+                }
+                assert!(!has_close_vertices(&verts), "a sliver edge");
+            }
+        }
+    }
+
+    #[test]
+    fn a_small_hull_is_kept_exactly() {
+        // A box's corners: the hull is the box.
+        let p: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    (i & 1) as f64,
+                    ((i >> 1) & 1) as f64 * 2.0,
+                    ((i >> 2) & 1) as f64,
+                )
+            })
+            .collect();
+        let v = few_vertex_hull(&p, 32, 1e-9);
+        assert!((v.volume() - 2.0).abs() < 1e-9, "{}", v.volume());
+        // Fewer than 8 allowed: the tetrahedron around the box still holds it.
+        let t = few_vertex_hull(&p, 4, 1e-9);
+        assert_eq!(t.hull_points().len(), 4);
+        assert!(p.iter().all(|&q| t.contains(q)));
+    }
+}

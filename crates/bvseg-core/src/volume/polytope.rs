@@ -1,0 +1,114 @@
+//! The convex polyhedron of a hull volume, in the volume's local coordinates.
+use glam::DVec3;
+
+use crate::bounding::hull::convex_hull;
+
+/// A convex polyhedron around the origin: its vertices, outward triangles and face planes,
+/// all in the local coordinates of its [`crate::BoundingVolume`] (world = centre + scale *
+/// local). The origin lies strictly inside, so every plane offset is positive and the gauge
+/// is `max_f n_f . t / d_f`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Polytope {
+    vertices: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    /// `(n, d)` per triangle: unit outward normal and offset, `n . t <= d` inside.
+    planes: Vec<(DVec3, f64)>,
+}
+
+impl Polytope {
+    /// The convex hull of `points` (local coordinates, around the origin), or `None` when it
+    /// is flat or does not hold the origin strictly inside.
+    pub fn new(points: &[DVec3]) -> Option<Self> {
+        let hull = convex_hull(points);
+        if hull.dim != 3 || hull.faces.len() < 4 {
+            return None;
+        }
+        let size = hull
+            .vertices
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0f64, f64::max);
+        let mut planes = Vec::with_capacity(hull.faces.len());
+        for f in 0..hull.faces.len() {
+            let (n, area) = hull.face_normal_area(f);
+            if area <= 0.0 {
+                return None;
+            }
+            let d = n.dot(hull.vertices[hull.faces[f][0] as usize]);
+            if d.is_nan() || d <= 1e-9 * size {
+                return None;
+            }
+            planes.push((n, d));
+        }
+        Some(Self {
+            vertices: hull.vertices,
+            triangles: hull.faces,
+            planes,
+        })
+    }
+
+    /// The vertices.
+    pub fn vertices(&self) -> &[DVec3] {
+        &self.vertices
+    }
+
+    /// Outward triangles over [`Polytope::vertices`].
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Face planes `(n, d)`: unit outward normal, positive offset.
+    pub fn planes(&self) -> &[(DVec3, f64)] {
+        &self.planes
+    }
+
+    /// The gauge of local point `t`: <= 1 inside, scaling the polytope by `s` divides it by `s`.
+    #[inline]
+    pub fn gauge(&self, t: DVec3) -> f64 {
+        self.planes
+            .iter()
+            .map(|&(n, d)| n.dot(t) / d)
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// The volume (the origin is inside, so every tetrahedron to it counts positively).
+    pub fn volume(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.vertices[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    /// The smallest face offset: how far the nearest face is from the origin.
+    pub fn min_offset(&self) -> f64 {
+        self.planes
+            .iter()
+            .map(|p| p.1)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The range of `k` with `a + k b` inside, or `None`.
+    #[inline]
+    pub fn interval(&self, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for &(n, d) in &self.planes {
+            let (na, nb) = (n.dot(a), n.dot(b));
+            if nb.abs() < 1e-300 {
+                if na > d {
+                    return None;
+                }
+            } else {
+                let k = (d - na) / nb;
+                if nb > 0.0 {
+                    hi = hi.min(k);
+                } else {
+                    lo = lo.max(k);
+                }
+            }
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+}
