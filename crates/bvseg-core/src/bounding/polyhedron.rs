@@ -59,10 +59,21 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
         return b.map_or(obb, |v| v.scaled_to_contain(finite.iter().copied()));
     }
     let diameter = 2.0 * obb.radii.length();
+    // The hull's face planes that truly support it: a sliver triangle of nearly collinear
+    // corners has no reliable normal (one on the bunny cut a third of its part away).
     let planes: Vec<(DVec3, f64)> = (0..hull.faces.len())
         .filter_map(|f| {
             let (n, area) = hull.face_normal_area(f);
-            (area > 0.0).then(|| (n, n.dot(hull.vertices[hull.faces[f][0] as usize])))
+            if area <= 1e-12 * diameter * diameter {
+                return None;
+            }
+            let d = n.dot(hull.vertices[hull.faces[f][0] as usize]);
+            let out = hull
+                .vertices
+                .iter()
+                .map(|&v| n.dot(v) - d)
+                .fold(f64::NEG_INFINITY, f64::max);
+            (out <= 1e-9 * diameter).then_some((n, d))
         })
         .collect();
     let mut faces = box_faces(&obb);
@@ -103,9 +114,13 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
         }
     }
     let verts = vertices(&faces, diameter);
-    BoundingVolume::hull(&verts)
-        .or_else(box_hull)
-        .map_or(obb, |v| v.scaled_to_contain(finite.iter().copied()))
+    let clipped = BoundingVolume::hull(&verts).map(|v| v.scaled_to_contain(finite.iter().copied()));
+    // Every plane supports the hull, so the clipped box is inside the box; should round-off
+    // ever have it otherwise, the box is the safe answer.
+    match clipped {
+        Some(v) if v.volume() <= obb.volume() * (1.0 + 1e-9) => v,
+        _ => box_hull().map_or(obb, |v| v.scaled_to_contain(finite.iter().copied())),
+    }
 }
 
 /// The regular-ish tetrahedron around a box (its four alternate corners pushed out so that
@@ -309,5 +324,86 @@ mod tests {
         let t = few_vertex_hull(&p, 4, 1e-9);
         assert_eq!(t.hull_points().len(), 4);
         assert!(p.iter().all(|&q| t.contains(q)));
+    }
+
+    #[test]
+    fn a_part_from_the_bunny_stays_tight() {
+        // The points of a bunny part whose clipped box once grew 70-fold.
+        let p = vec![
+            DVec3::new(-2.138539917287596, 3.972308533084961, 0.2537757417287594),
+            DVec3::new(-2.138539917287596, 4.399054016542481, -0.3863424834575193),
+            DVec3::new(-2.138539917287596, 4.612426758271241, -1.026460708643798),
+            DVec3::new(-2.031853546423216, 3.972308533084961, 0.3604621125931393),
+            DVec3::new(-1.7117944338300766, 1.411835632339846, 0.2537757417287594),
+            DVec3::new(-1.7117944338300766, 4.612426758271241, 0.46714848345751925),
+            DVec3::new(-1.7117944338300766, 5.679290466915038, -0.5997152251862787),
+            DVec3::new(-1.605108062965697, 1.3051492614754663, 0.2537757417287594),
+            DVec3::new(-1.605108062965697, 1.411835632339846, 0.3604621125931393),
+            DVec3::new(-1.605108062965697, 2.6920720827124036, 0.5738348543218992),
+            DVec3::new(-1.605108062965697, 4.612426758271241, 0.5738348543218992),
+            DVec3::new(-1.3917353212369372, 1.838581115797365, 0.5738348543218992),
+            DVec3::new(-1.3917353212369372, 4.612426758271241, 0.5738348543218992),
+            DVec3::new(-1.1783625795081774, 1.3051492614754663, 0.2537757417287594),
+            DVec3::new(-1.1783625795081774, 1.5185220032042257, 0.46714848345751925),
+            DVec3::new(-1.1783625795081774, 1.6252083740686056, 0.5738348543218992),
+            DVec3::new(-0.9649898377794184, 1.5185220032042257, 0.46714848345751925),
+            DVec3::new(-0.9649898377794184, 1.6252083740686056, 0.5738348543218992),
+            DVec3::new(-0.9649898377794184, 4.185681274813721, 0.5738348543218992),
+            DVec3::new(-0.7516170960506585, 1.3051492614754663, -0.8130879669150382),
+            DVec3::new(
+                -0.7516170960506585,
+                1.3051492614754663,
+                -0.17296974172875945,
+            ),
+            DVec3::new(-0.6449307251862786, 1.6252083740686056, 0.2537757417287594),
+            DVec3::new(-0.5382443543218987, 1.5185220032042257, 0.04040300000000041),
+            DVec3::new(-0.4315579834575187, 1.6252083740686056, 0.04040300000000041),
+            DVec3::new(-0.4315579834575187, 4.185681274813721, 0.04040300000000041),
+            DVec3::new(-0.3248716125931388, 1.5185220032042257, -0.3863424834575193),
+            DVec3::new(
+                -0.21818524172875975,
+                1.6252083740686056,
+                -0.3863424834575193,
+            ),
+            DVec3::new(-0.21818524172875975, 2.478699340983644, -0.5997152251862787),
+            DVec3::new(-0.21818524172875975, 3.545563049627442, -0.8130879669150382),
+            DVec3::new(-0.21818524172875975, 3.758935791356202, -0.3863424834575193),
+            DVec3::new(-1.13696, 3.194401, -1.513455),
+            DVec3::new(-1.001832, 3.590411, -1.545892),
+            DVec3::new(-1.821193, 4.366982, -1.266271),
+            DVec3::new(-1.915407, 4.693647, -1.151721),
+            DVec3::new(-0.579059, 4.042511, -1.540883),
+            DVec3::new(-0.693698, 4.478782, -1.369372),
+            DVec3::new(-1.001416, 1.298225, -0.904674),
+            DVec3::new(-1.248839, 5.959105, 0.041761),
+            DVec3::new(-1.002038, 5.794454, -0.187194),
+            DVec3::new(-2.120811, 1.836483, -0.62338),
+            DVec3::new(-0.823768, 3.788746, -1.567481),
+            DVec3::new(-0.76988, 1.508373, -1.419599),
+            DVec3::new(-1.728102, 1.110064, -0.635963),
+            DVec3::new(-0.801715, 4.973149, -1.068582),
+            DVec3::new(-0.71211, 5.341811, -0.803281),
+            DVec3::new(-0.822371, 5.517453, -0.605747),
+            DVec3::new(-1.880401, 5.583843, -0.696561),
+            DVec3::new(-2.025852, 5.089562, -0.980218),
+            DVec3::new(-1.776173, 5.287097, -0.89091),
+            DVec3::new(-1.600621, 5.962818, -0.188044),
+            DVec3::new(-1.600803, 5.785347, -0.491069),
+            DVec3::new(-1.588831, 5.615418, -0.665456),
+            DVec3::new(-1.370865, 5.838832, -0.341026),
+            DVec3::new(-1.964823, 1.464607, -0.58115),
+            DVec3::new(-1.916516, 4.054121, -1.301788),
+            DVec3::new(-1.931518, 3.062883, -1.197227),
+        ];
+        let v = few_vertex_hull(&p, 32, 0.1);
+        let exact = BoundingVolume::hull(&p).unwrap();
+        assert!(v.hull_points().len() <= 32);
+        assert!(p.iter().all(|&q| v.contains(q)));
+        assert!(
+            v.volume() < 3.0 * exact.volume(),
+            "{} vs {}",
+            v.volume(),
+            exact.volume()
+        );
     }
 }

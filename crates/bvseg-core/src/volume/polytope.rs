@@ -31,14 +31,19 @@ impl Polytope {
         let mut planes = Vec::with_capacity(hull.faces.len());
         for f in 0..hull.faces.len() {
             let (n, area) = hull.face_normal_area(f);
-            if area <= 0.0 {
-                return None;
+            // A sliver of nearly collinear corners bounds nothing its neighbours do not, and
+            // its normal is noise: it takes no plane.
+            if area <= 1e-12 * size * size {
+                continue;
             }
             let d = n.dot(hull.vertices[hull.faces[f][0] as usize]);
             if d.is_nan() || d <= 1e-9 * size {
                 return None;
             }
             planes.push((n, d));
+        }
+        if planes.len() < 4 {
+            return None;
         }
         Some(Self {
             vertices: hull.vertices,

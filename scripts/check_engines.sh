@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# Checks bvseg's engine outputs with the clients people load them with:
+# - GLB: the Khronos glTF validator (npm gltf-validator, its validateBytes API, through
+#   scripts/validate_glb.mjs) must report no error; and the KHR_physics_rigid_bodies colliders
+#   must match the JSON volumes (KHR_implicit_shapes type and size, axis, convex hulls).
+# - MJCF: MuJoCo's Python package loads it (MjModel.from_xml_path), steps it, and its geoms
+#   (type, size, position, axes; mesh vertices in world coordinates) must match the JSON.
+# The checks of both are in scripts/check_engines.py.
+#
+#   scripts/check_engines.sh BVSEG_BINARY [OUTDIR]
+#
+# Each bundled mesh is segmented at the defaults and at --k 16 with every engine target and
+# a few --bv kinds, writing OUTDIR/<mesh>_<config>.{json,glb,xml} (OUTDIR defaults to a
+# temporary folder, removed at the end). Prints one line per file, OK or FAIL with the
+# reasons, and exits 1 if any failed.
+#
+# The clients are installed on first use, from the npm registry and PyPI only, into
+# $BVSEG_ENGINE_CACHE (default ~/.cache/bvseg-engines): needs node/npm and python3 (venv).
+set -euo pipefail
+
+GLTF_VALIDATOR_VERSION=2.0.0-dev.3.10
+MUJOCO_VERSION=4.0.0
+
+if [ $# -lt 1 ] || [ $# -gt 2 ]; then
+    echo "usage: $0 BVSEG_BINARY [OUTDIR]" >&2
+    exit 2
+fi
+start=$SECONDS
+bvseg=$(realpath "$1")
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cache="${BVSEG_ENGINE_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/bvseg-engines}"
+if [ $# -ge 2 ]; then
+    out=$2
+    mkdir -p "$out"
+    out=$(realpath "$out")
+else
+    out=$(mktemp -d)
+    trap 'rm -rf "$out"' EXIT
+fi
+mkdir -p "$cache"
+
+# --- clients ------------------------------------------------------------------------------
+validator="$cache/gltf-$GLTF_VALIDATOR_VERSION"
+if [ ! -f "$validator/node_modules/gltf-validator/package.json" ]; then
+    echo "installing gltf-validator@$GLTF_VALIDATOR_VERSION into $validator"
+    npm install --prefix "$validator" --no-save --no-audit --no-fund --loglevel=error \
+        "gltf-validator@$GLTF_VALIDATOR_VERSION" >"$cache/npm.log" 2>&1 ||
+        { cat "$cache/npm.log" >&2; exit 2; }
+fi
+venv="$cache/mujoco-$MUJOCO_VERSION-venv"
+py="$venv/bin/python"
+if ! "$py" -c "import mujoco, sys; sys.exit(mujoco.__version__ != '$MUJOCO_VERSION')" 2>/dev/null; then
+    echo "installing mujoco==$MUJOCO_VERSION into $venv"
+    rm -rf "$venv"
+    python3 -m venv "$venv"
+    "$py" -m pip install --quiet --disable-pip-version-check "mujoco==$MUJOCO_VERSION" \
+        >"$cache/pip.log" 2>&1 || { cat "$cache/pip.log" >&2; exit 2; }
+fi
+versions=$("$py" -c "import mujoco, numpy; print(f'mujoco {mujoco.__version__} (engine {mujoco.mj_versionString()}), numpy {numpy.__version__}')")
+echo "clients: gltf-validator $GLTF_VALIDATOR_VERSION, $versions, node $(node --version)"
+echo "bvseg: $("$bvseg" --version)"
+
+# --- outputs ------------------------------------------------------------------------------
+configs=(
+    "default|"
+    "gltf|--k 16 --target gltf"
+    "gltf-hull|--k 16 --target gltf-hull"
+    "mujoco|--k 16 --target mujoco"
+    "mujoco-hull|--k 16 --target mujoco-hull"
+    "hull|--k 16 --bv hull"
+    "capsule|--k 16 --bv capsule"
+    "ellipsoid|--k 16 --bv ellipsoid"
+)
+bases=() failed=0
+for mesh in "$root"/assets/meshes/{bunny,spot,fourleg_2}.obj; do
+    name=$(basename "$mesh" .obj)
+    for entry in "${configs[@]}"; do
+        tag=${entry%%|*} args=${entry#*|}
+        base="$out/${name}_$tag"
+        rm -f "$base".{json,glb,xml}
+        # shellcheck disable=SC2086
+        if "$bvseg" segment "$mesh" -q $args -o "$base.json" -o "$base.glb" -o "$base.xml" \
+            >"$base.log" 2>&1; then
+            bases+=("$base")
+        else
+            echo "FAIL ${name}_$tag: bvseg segment $args exited $?: $(tail -n 3 "$base.log" | tr '\n' ' ')"
+            failed=1
+        fi
+    done
+done
+
+# --- checks -------------------------------------------------------------------------------
+if [ ${#bases[@]} -gt 0 ]; then
+    glbs=()
+    for base in "${bases[@]}"; do glbs+=("$base.glb"); done
+    node "$root/scripts/validate_glb.mjs" "$validator" "$out/validator.json" "${glbs[@]}"
+    "$py" "$root/scripts/check_engines.py" "$out/validator.json" "${bases[@]}" || failed=1
+fi
+echo "$(( ${#bases[@]} * 2 )) files checked in $(( SECONDS - start )) s: $([ $failed = 0 ] && echo all OK || echo FAILURES)"
+exit $failed
