@@ -134,6 +134,7 @@ fn fit_moves(
     part: &Partition,
     moves: &[Move],
     current: &[Arc<Fit>],
+    among: Option<Kinds>,
 ) {
     // (move, side) for each part not fitted yet: `false` the giving part, `true` the receiving.
     let todo: Vec<(usize, bool)> = moves
@@ -141,11 +142,11 @@ fn fit_moves(
         .enumerate()
         .flat_map(|(i, mv)| {
             let from = fitter
-                .get_as(&mv.m_from, kind(current, mv.from))
+                .get_as(&mv.m_from, kind(current, mv.from, among))
                 .is_none()
                 .then_some((i, false));
             let to = fitter
-                .get_as(&mv.m_to, kind(current, mv.to))
+                .get_as(&mv.m_to, kind(current, mv.to, among))
                 .is_none()
                 .then_some((i, true));
             from.into_iter().chain(to)
@@ -164,7 +165,7 @@ fn fit_moves(
             // all its new points, at a fraction of the cost.
             let mut pts = current[mv.to as usize].hull.clone();
             pts.extend(enclosure.points_with(mesh, solid, label_of, &mv.layer, mv.to));
-            (mv.m_to, pts, kind(current, mv.to))
+            (mv.m_to, pts, kind(current, mv.to, among))
         } else {
             let mem: Vec<u32> = members[mv.from as usize]
                 .iter()
@@ -174,25 +175,33 @@ fn fit_moves(
             (
                 mv.m_from,
                 enclosure.points_with(mesh, solid, label_of, &mem, mv.from),
-                kind(current, mv.from),
+                kind(current, mv.from, among),
             )
         }
     });
     fitter.fit_candidates_as(solid, work);
 }
 
-/// The kind a move's new fit of part `i` may have: the kind of its current fit. The moves
-/// are judged with each part's real kind, at the cost of one fit instead of one per kind of
-/// the run; the refit after the tightening chooses among them all again.
-fn kind(current: &[Arc<Fit>], i: u32) -> Kinds {
-    Kinds::only(current[i as usize].volume.shape)
+/// The kinds a move's new fit of part `i` may have: `among`, or without it the kind of its
+/// current fit (the move is judged with the part's real kind at the cost of one fit
+/// instead of one per kind; the refit after the tightening chooses among them all again).
+fn kind(current: &[Arc<Fit>], i: u32, among: Option<Kinds>) -> Kinds {
+    match among {
+        None => Kinds::only(current[i as usize].volume.shape),
+        Some(all) => all,
+    }
 }
 
 /// The fits of a move's two new parts (see [`kind`]), if both are cached.
-fn move_fits(fitter: &Fitter, mv: &Move, current: &[Arc<Fit>]) -> Option<(Arc<Fit>, Arc<Fit>)> {
+fn move_fits(
+    fitter: &Fitter,
+    mv: &Move,
+    current: &[Arc<Fit>],
+    among: Option<Kinds>,
+) -> Option<(Arc<Fit>, Arc<Fit>)> {
     Some((
-        fitter.get_as(&mv.m_from, kind(current, mv.from))?,
-        fitter.get_as(&mv.m_to, kind(current, mv.to))?,
+        fitter.get_as(&mv.m_from, kind(current, mv.from, among))?,
+        fitter.get_as(&mv.m_to, kind(current, mv.to, among))?,
     ))
 }
 
@@ -206,11 +215,15 @@ fn apply(part: &mut Partition, mv: &Move) {
 }
 
 /// How long a tightening runs: up to `total` passes, of which at most `full` judge every move
-/// (the others only the moves that gained before: see the comment on `last_gain`).
+/// (the others only the moves that gained before: see the comment on `last_gain`); and
+/// whether a move's parts keep their kinds (`keep_kinds`, one fit per part: the quick
+/// tightenings of the refinement's checkpoints) or choose among all the run's kinds (the
+/// final one: on the shared human_2, keeping them left TOV at 0.342 instead of 0.326).
 #[derive(Debug, Clone, Copy)]
 pub struct Passes {
     pub total: usize,
     pub full: usize,
+    pub keep_kinds: bool,
 }
 
 /// Run boundary-layer moves on `part` for `passes`; returns the moves made. A move may not
@@ -220,6 +233,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
     let tol = ctx.tolerances();
     let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
     let (full_passes, mov_tol, pr_tol) = (passes.full, tol.mov_bound(), tol.protrusion);
+    let among = (!passes.keep_kinds).then(|| fitter.kinds());
     let passes = passes.total;
     let g = &solid.grid;
     let max_full = full_passes.max(1);
@@ -258,12 +272,12 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             }
             cands.extend(layer_move(solid, part, pair, layer, min_part));
         }
-        fit_moves(mesh, solid, fitter, part, &cands, &fits);
+        fit_moves(mesh, solid, fitter, part, &cands, &fits, among);
         // Gains against the current state.
         let ov = |f: &Fit, n: f64| relative(f.outside.len(), n);
         let mut scored: Vec<(i64, usize)> = Vec::new();
         for (i, mv) in cands.iter().enumerate() {
-            let Some((fa, fb)) = move_fits(fitter, mv, &fits) else {
+            let Some((fa, fb)) = move_fits(fitter, mv, &fits, among) else {
                 continue;
             };
             let old = [
@@ -286,7 +300,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             if touched[a] || touched[b] {
                 continue;
             }
-            let Some((fa, fb)) = move_fits(fitter, mv, &fits) else {
+            let Some((fa, fb)) = move_fits(fitter, mv, &fits, among) else {
                 continue;
             };
             let limit = |old: &Fit, n_old: f64| ov(old, n_old).max(mov_tol);
@@ -343,6 +357,7 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
     let tol = ctx.tolerances();
     let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
     let (tov_tol, mov_tol) = (tol.tov, tol.mov_bound());
+    let among = None;
     let total = solid.len() as f64;
     let min_part = min_part(solid, part);
     let mut moves = 0;
@@ -374,11 +389,11 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
             .into_iter()
             .filter_map(|(pair, layer)| layer_move(solid, part, pair, layer, min_part))
             .collect();
-        fit_moves(mesh, solid, fitter, part, &cands, &fits);
+        fit_moves(mesh, solid, fitter, part, &cands, &fits, among);
         let mut best: Option<(f64, usize)> = None;
         for (i, mv) in cands.iter().enumerate() {
             let (a, b) = (mv.from as usize, mv.to as usize);
-            let Some((fa, fb)) = move_fits(fitter, mv, &fits) else {
+            let Some((fa, fb)) = move_fits(fitter, mv, &fits, among) else {
                 continue;
             };
             let others = (0..ov.len())

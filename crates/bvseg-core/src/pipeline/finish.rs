@@ -11,7 +11,11 @@ use crate::{hierarchy, BoundingVolume, Metrics, Part, Segmentation, Step};
 
 /// Passes of the final tightening, of which 3 judge every move (the others only those that
 /// gained).
-pub const TIGHTEN_PASSES: Passes = Passes { total: 40, full: 3 };
+pub const TIGHTEN_PASSES: Passes = Passes {
+    total: 40,
+    full: 3,
+    keep_kinds: false,
+};
 
 /// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
 pub const RELIEVE_STEPS: usize = 40;

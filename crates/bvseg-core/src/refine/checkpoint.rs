@@ -6,7 +6,11 @@ use crate::tightening::Passes;
 use crate::{Params, Step, StepKind};
 
 /// Passes of a tightening checkpoint (one of them full).
-pub const CHECKPOINT_PASSES: Passes = Passes { total: 4, full: 1 };
+pub const CHECKPOINT_PASSES: Passes = Passes {
+    total: 4,
+    full: 1,
+    keep_kinds: true,
+};
 
 /// A checkpoint is due when TOV is within this factor of its tolerance (or, whatever TOV,
 /// once k has reached [`CHECKPOINT_LATE`] of the part limit)...
