@@ -1,8 +1,10 @@
 //! # bvseg-core
 //!
-//! Wraps a solid, given as a closed triangle mesh, in the union of a few ellipsoids or
-//! oriented boxes by segmenting its volume variationally (Lu, Choi, Wang, Kim: *Variational
-//! 3D Shape Segmentation for Bounding Volume Computation*, Eurographics 2007).
+//! Wraps a solid, given as a closed triangle mesh, in the union of a few simple volumes
+//! (ellipsoids, oriented boxes, spheres, capsules, cylinders, convex hulls: [`Shape`], chosen
+//! per part among [`Params::kinds`]) by segmenting its volume variationally (Lu, Choi, Wang,
+//! Kim: *Variational 3D Shape Segmentation for Bounding Volume Computation*, Eurographics
+//! 2007).
 //!
 //! ```
 //! use bvseg_core::{segment, Mesh, Params};
