@@ -130,9 +130,11 @@ fn write_atomic_failure_leaves_nothing_behind() {
 fn json_file_round_trip() {
     let dir = scratch("json_file_round_trip");
     let mesh = load_all(BUNNY).unwrap().mesh;
+    // Ellipsoids only: a schema-1 file of one kind.
     let params = Params {
         samples: 2000,
         k: Some(2),
+        kinds: bvseg_core::Kinds::ELLIPSOID,
         ..Params::default()
     };
     let seg = segment(&mesh, &params).unwrap();
