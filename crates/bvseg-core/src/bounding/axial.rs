@@ -13,7 +13,7 @@
 //! their best radius.
 use glam::{DMat3, DVec2, DVec3};
 
-use super::ball::{min_circle_in_order, shuffled};
+use super::ball::{finite_shuffled, min_circle_in_order};
 use crate::linalg::sym_eigen;
 use crate::volume::BoundingVolume;
 #[cfg(test)]
@@ -41,13 +41,7 @@ pub enum Axial {
 /// half-length at least `min_r` (a capsule's half-length may be 0).
 pub fn min_axial(points: &[DVec3], kind: Axial, min_r: f64) -> BoundingVolume {
     // One shuffle for all the projections' circles.
-    let p: Vec<DVec3> = shuffled(
-        &points
-            .iter()
-            .copied()
-            .filter(|p| p.is_finite())
-            .collect::<Vec<_>>(),
-    );
+    let p: Vec<DVec3> = finite_shuffled(points);
     if p.is_empty() {
         let unit = match kind {
             Axial::Capsule => BoundingVolume::capsule(DVec3::ZERO, DVec3::Z, 0.0, min_r),

@@ -20,16 +20,16 @@ pub fn shuffled<T: Copy>(points: &[T]) -> Vec<T> {
     v
 }
 
+/// The finite points of `points`, [`shuffled`].
+pub fn finite_shuffled(points: &[DVec3]) -> Vec<DVec3> {
+    let finite: Vec<DVec3> = points.iter().copied().filter(|p| p.is_finite()).collect();
+    shuffled(&finite)
+}
+
 /// The smallest ball holding `points` (finite ones), radius at least `min_r`; a ball of radius
 /// `min_r` at the origin when there is none.
 pub fn min_ball(points: &[DVec3], min_r: f64) -> BoundingVolume {
-    let p: Vec<DVec3> = shuffled(
-        &points
-            .iter()
-            .copied()
-            .filter(|p| p.is_finite())
-            .collect::<Vec<_>>(),
-    );
+    let p: Vec<DVec3> = finite_shuffled(points);
     let Some(&first) = p.first() else {
         return BoundingVolume::sphere(DVec3::ZERO, min_r);
     };
