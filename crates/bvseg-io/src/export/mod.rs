@@ -17,7 +17,7 @@ use crate::{write_atomic, IoError};
 pub use glb::to_glb;
 pub use mjcf::to_mjcf;
 pub use obj::to_obj;
-pub use proxy::{part_color, volume_rotation};
+pub use proxy::{enclosing_points, part_color, volume_rotation, y_up_rotation};
 
 /// An output format, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -231,6 +231,22 @@ pub(crate) fn hull_vertices(v: &BoundingVolume) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     }
 }
 
+/// The vertices, around the volume's centre (world minus centre), of the convex polyhedron
+/// an engine gets for a kind it has no shape of: a hull's own vertices; for an ellipsoid an
+/// enclosing polyhedron (a 12-segment UV sphere whose faces touch the ellipsoid from outside,
+/// 62 vertices); empty for the other kinds, which engines take natively.
+pub fn enclosing_points(v: &BoundingVolume) -> Vec<DVec3> {
+    match v.shape {
+        Shape::Hull => hull_vertices(v).0,
+        Shape::Ellipsoid => enclosing_sphere_hull(12)
+            .positions
+            .iter()
+            .map(|&p| v.axes * (p * v.radii))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
 /// A display mesh of any volume in world space: positions and triangles (UV spheres for the
 /// curved kinds, `n` segments around).
 pub(crate) fn world_triangles(v: &BoundingVolume, n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
