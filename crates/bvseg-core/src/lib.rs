@@ -127,3 +127,8 @@ pub fn segment_with(
     }
     seg.finish()
 }
+
+// The crate page's example (README.md, also shown on crates.io) is compiled as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -87,6 +87,50 @@ pub struct LoadStats {
     pub degenerate: usize,
 }
 
+/// Builds a [`LoadedMesh`] from vertex positions and vertex-index triangles held in memory,
+/// by the same last step as the file readers ([`crate::load`]): exactly coincident
+/// positions are welded, triangles degenerate after welding are dropped (and listed in
+/// [`LoadedMesh::dropped`]), a mostly closed surface facing inward is turned outward, and the
+/// report is made. The positions are kept in the order given, which the result depends on
+/// (bit for bit) as a file's does: the OBJ reader passes the vertices the faces use, in the
+/// order they first use them; the STL reader three per triangle; the glTF reader the
+/// accessors' in buffer order. A loaded mesh fed back through this is unchanged. `name` is
+/// what error messages call the mesh.
+///
+/// # Errors
+///
+/// [`IoError::Parse`] for a triangle that refers to a vertex that does not exist, a
+/// non-finite coordinate or more than [`MAX_TRIANGLES`] triangles; [`IoError::NoTriangles`]
+/// when no triangle is left; [`IoError::Mesh`] when [`bvseg_core::Mesh::new`] refuses the
+/// result (a coordinate beyond [`bvseg_core::MAX_COORDINATE`]).
+pub fn load_arrays(
+    positions: Vec<DVec3>,
+    triangles: Vec<[usize; 3]>,
+    name: &str,
+) -> Result<LoadedMesh, IoError> {
+    let raw = RawMesh::default();
+    raw.reserve_triangles(triangles.len(), name)?;
+    let n = positions.len();
+    for (index, t) in triangles.iter().enumerate() {
+        if let Some(&vertex) = t.iter().find(|&&i| i >= n) {
+            return Err(IoError::Parse {
+                name: name.to_owned(),
+                line: None,
+                message: format!(
+                    "triangle {index} refers to vertex {vertex}, but the mesh has only {n} vertices"
+                ),
+            });
+        }
+    }
+    finish(
+        RawMesh {
+            positions,
+            triangles,
+        },
+        name,
+    )
+}
+
 /// Welds, validates and reports; see the module docs.
 pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
     let RawMesh {
@@ -163,4 +207,86 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
         report,
         dropped,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube() -> (Vec<DVec3>, Vec<[usize; 3]>) {
+        let v = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
+            .collect();
+        let t = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        (v, t)
+    }
+
+    #[test]
+    fn arrays_take_the_readers_path() {
+        let (v, t) = cube();
+        // Inward-facing, with a repeated vertex and a degenerate triangle: welded, dropped,
+        // turned outward, as a file would be.
+        let mut v2 = v.clone();
+        v2.push(v[7]);
+        let mut t2: Vec<[usize; 3]> = t.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        t2[3] = [5, 6, 8];
+        t2.push([0, 0, 1]);
+        let loaded = load_arrays(v2, t2, "cube").unwrap();
+        assert_eq!(loaded.stats.welded, 1);
+        assert_eq!(loaded.stats.degenerate, 1);
+        assert_eq!(loaded.dropped, [12]);
+        assert!(loaded.report.flipped && loaded.report.volume > 0.0);
+        // A loaded mesh fed back is unchanged.
+        let again = load_arrays(
+            loaded.mesh.vertices().to_vec(),
+            loaded
+                .mesh
+                .triangles()
+                .iter()
+                .map(|t| t.map(|i| i as usize))
+                .collect(),
+            "cube",
+        )
+        .unwrap();
+        assert_eq!(again.mesh, loaded.mesh);
+        assert_eq!(
+            load_arrays(v.clone(), t.clone(), "cube").unwrap().mesh,
+            again.mesh
+        );
+    }
+
+    #[test]
+    fn bad_arrays_are_errors() {
+        let (v, mut t) = cube();
+        t[4] = [0, 1, 8];
+        let e = load_arrays(v.clone(), t, "m").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "m: triangle 4 refers to vertex 8, but the mesh has only 8 vertices"
+        );
+        let e = load_arrays(v.clone(), Vec::new(), "m")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "m: no triangles");
+        let mut bad = v;
+        bad[2].y = f64::NAN;
+        let e = load_arrays(bad, cube().1, "m").unwrap_err().to_string();
+        assert!(
+            e.starts_with("m: a vertex has a non-finite coordinate"),
+            "{e}"
+        );
+    }
 }

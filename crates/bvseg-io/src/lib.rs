@@ -27,7 +27,7 @@ pub use volumes_read::{
 
 pub use atomic::write_atomic;
 pub use error::IoError;
-pub use finish::{LoadStats, LoadedMesh, MAX_TRIANGLES};
+pub use finish::{load_arrays, LoadStats, LoadedMesh, MAX_TRIANGLES};
 pub use json::{schema_and_kind, to_json_string, write_json, GENERATOR, SCHEMA, SCHEMA_V2};
 pub use obj::MAX_INPUT_BYTES;
 pub use report::MeshReport;
@@ -173,3 +173,8 @@ pub fn extension(path: &Path) -> Option<String> {
     path.extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
 }
+
+// The crate page's example (README.md, also shown on crates.io) is compiled as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
