@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
-use bvseg_core::{Cancel, Params, Segmentation, Segmenter, Step};
+use bvseg_core::{Cancel, Params, Segmentation, Segmenter, Step, BUDGET_WARNING};
 use bvseg_io::export::{write_labels, write_output, ExportOptions, OutputFormat};
 use bvseg_io::{CliSummary, RunSummary};
 use numpy::PyArray1;
@@ -17,10 +17,6 @@ use pyo3::types::PyDict;
 use crate::args::Given;
 use crate::errors::{self, MeshError};
 use crate::mesh::PyMesh;
-
-/// Said when the run's bound on work cut it short (the command line's words).
-const BUDGET_WARNING: &str = "refinement stopped early: the volumes cover far more empty \
-    space than their parts (many pieces scattered over a large box?); they still enclose the mesh";
 
 /// The result of `segment` (wrapped by `bvseg.Segmentation`).
 #[pyclass(frozen, name = "NativeSegmentation", module = "bvseg._bvseg")]

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use bvseg_core::{Params, Segmentation};
+use bvseg_core::{Params, Segmentation, BUDGET_WARNING};
 use bvseg_io::export::{write_labels, write_output, ExportOptions, OutputFormat};
 use bvseg_io::{CliSummary, LoadedMesh, RunSummary};
 use clap::Args;
@@ -52,10 +52,6 @@ pub struct SegmentArgs {
     #[arg(short, long)]
     pub quiet: bool,
 }
-
-/// Said when the run's bound on work cut it short.
-pub const BUDGET_WARNING: &str = "refinement stopped early: the volumes cover far more empty \
-    space than their parts (many pieces scattered over a large box?); they still enclose the mesh";
 
 pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     let params = args.params.params()?;

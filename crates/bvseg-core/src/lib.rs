@@ -73,7 +73,7 @@ pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
 pub use params::{Params, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES};
 pub use pipeline::Segmenter;
-pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind};
+pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, BUDGET_WARNING};
 pub use volume::{BoundingVolume, Polytope, Shape};
 
 /// The stages' own entry points, for the benchmarks, the fuzz targets and the tests that

@@ -128,9 +128,14 @@ pub struct Segmentation {
     /// Whether the run's bound on work cut refinement, merging or the polish short (see
     /// the crate's docs on awkward inputs): the volumes still enclose the mesh, but more
     /// work would have made them tighter. Happens on solids of many specks scattered over a
-    /// large box, not on ordinary models.
+    /// large box, not on ordinary models. [`BUDGET_WARNING`] says it in words.
     pub budget_exhausted: bool,
 }
+
+/// What the front ends (the CLI, the Python package) warn when
+/// [`Segmentation::budget_exhausted`] is set.
+pub const BUDGET_WARNING: &str = "refinement stopped early: the volumes cover far more empty \
+    space than their parts (many pieces scattered over a large box?); they still enclose the mesh";
 
 impl Segmentation {
     /// Whether a tolerance-mode run (`params.k == None`) met its tolerances: TOV below
