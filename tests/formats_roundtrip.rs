@@ -97,7 +97,7 @@ fn write_glb(m: &Mesh, matrix: &DMat4, parent_translation: DVec3) -> Vec<u8> {
         3 * m.triangles().len()
     );
     let mut j = json.into_bytes();
-    while !j.len().is_multiple_of(4) {
+    while j.len() % 4 != 0 {
         j.push(b' ');
     }
     let mut out = b"glTF".to_vec();

@@ -516,7 +516,7 @@ fn read_primitive(
     };
     let tris: Vec<[usize; 3]> = match mode {
         Mode::Triangles => {
-            if !indices.len().is_multiple_of(3) {
+            if indices.len() % 3 != 0 {
                 return Err(err(
                     name,
                     format!(

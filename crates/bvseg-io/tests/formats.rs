@@ -126,11 +126,11 @@ fn gltf_bin(indexed: bool) -> Vec<u8> {
 /// Wraps a JSON document and a binary chunk in a GLB container.
 pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let mut j = json.as_bytes().to_vec();
-    while !j.len().is_multiple_of(4) {
+    while j.len() % 4 != 0 {
         j.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
+    while bin.len() % 4 != 0 {
         bin.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + bin.len();

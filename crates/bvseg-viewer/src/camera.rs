@@ -75,14 +75,15 @@ impl OrbitCamera {
 
     /// The view matrix.
     pub fn view(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye(), self.target, Vec3::Y)
+        glam::camera::rh::view::look_at_mat4(self.eye(), self.target, Vec3::Y)
     }
 
     /// Projection times view, for a viewport of the given aspect ratio (width / height).
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
         let near = (self.distance - 2.0 * self.radius).max(self.distance * 0.01);
         let far = self.distance + 2.0 * self.radius;
-        Mat4::perspective_rh_gl(FOV_Y, aspect.max(1e-3), near, far) * self.view()
+        glam::camera::rh::proj::opengl::perspective(FOV_Y, aspect.max(1e-3), near, far)
+            * self.view()
     }
 }
 

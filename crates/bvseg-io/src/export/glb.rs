@@ -37,7 +37,7 @@ struct Builder {
 
 impl Builder {
     fn view(&mut self, bytes: &[u8], target: u32) -> usize {
-        while !self.bin.len().is_multiple_of(4) {
+        while self.bin.len() % 4 != 0 {
             self.bin.push(0);
         }
         self.views.push(json!({
@@ -242,7 +242,7 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
             json!(node);
     }
 
-    while !b.bin.len().is_multiple_of(4) {
+    while b.bin.len() % 4 != 0 {
         b.bin.push(0);
     }
     let mut doc = json!({
@@ -271,7 +271,7 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
 }
 
 fn container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
-    while !json.len().is_multiple_of(4) {
+    while json.len() % 4 != 0 {
         json.push(b' ');
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
