@@ -15,7 +15,7 @@ use crate::enclosure::Enclosure;
 use crate::metrics::{outside_cells, protrusion_capped, Cell, SurfaceDistance};
 use crate::moments::Moments;
 use crate::partition::Solid;
-use crate::{BoundingVolume, Cancel, Kinds, Mesh};
+use crate::{BoundingVolume, Cancel, Kinds, Mesh, Shape};
 
 /// Tolerance of the ellipsoid fit (relative volume excess over the optimum).
 pub const MVEE_TOL: f64 = 1e-4;
@@ -166,6 +166,21 @@ impl Fitter {
     /// set still gets a correct fit, only a slower one.
     pub fn fit_points(&self, solid: &Solid, points: &[DVec3]) -> BoundingVolume {
         self.choose(solid, points, self.kinds).0
+    }
+
+    /// The fits to `points` (convex-hull vertices, as for [`Fitter::fit_points`]) of each of
+    /// this fitter's kinds but `except`, in the kinds' order, fitted in parallel.
+    pub fn fits_of_other_kinds(
+        &self,
+        solid: &Solid,
+        points: &[DVec3],
+        except: Shape,
+    ) -> Vec<BoundingVolume> {
+        let min_r = 0.5 * solid.grid.h;
+        let shapes: Vec<Shape> = self.kinds.shapes().filter(|&s| s != except).collect();
+        crate::parallel::map(&shapes, |&s| {
+            crate::bounding::fit(s, points, min_r, self.max_hull_vertices)
+        })
     }
 
     /// This fitter's kinds.

@@ -41,21 +41,25 @@ const MAX_TRIALS: usize = 600;
 /// lattice's count of outside cells while the true outside volume rose by 6 %.
 const MIN_SEMI_AXIS_CELLS: f64 = 1.5;
 
-/// Reshape the ellipsoids among `volumes` (boxes are kept as they are). `points[i]` are the
-/// points volume `i` must hold (its part's enclosure or convex-hull points), `cells[i]` its
-/// outside cells (see [`outside_cells`]), `counts[i]` the number of samples in its part;
-/// `min_r` is the smallest semi-axis allowed. The trials may visit `budget` outside cells in
-/// all: the search stops, keeping the best volume so far, at the end of the round that spent
-/// it (a volume spanning a lattice of mostly empty cells would otherwise take seconds per
-/// round). Returns the new volumes and their outside cells, in the same order.
+/// Reshape the volumes: each in turn becomes the candidate that adds the fewest outside
+/// cells to the union of the others. The candidates are the volume itself,
+/// `fits(points[i], shape)` (the fits of every other kind the run allows: a part whose own
+/// best kind leaves outside space that no neighbour covers can switch to one that overlaps
+/// its neighbours), and the reshaped ellipsoid searched from the best ellipsoid among them. `points[i]` are the points
+/// volume `i` must hold (its part's enclosure or convex-hull points), `cells[i]` its outside
+/// cells (see [`outside_cells`]), `counts[i]` the number of samples in its part; `min_r` is
+/// the smallest semi-axis allowed. The trials may visit `budget` outside cells in all: the
+/// search stops, keeping the best volume so far, at the end of the round that spent it (a
+/// volume spanning a lattice of mostly empty cells would otherwise take seconds per round).
+/// Returns the new volumes and their outside cells, in the same order.
 pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
     volumes: &[BoundingVolume],
     mut cells: Vec<Vec<Cell>>,
     counts: &[f64],
-    min_r: f64,
-    budget: u64,
+    (min_r, budget): (f64, u64),
+    fits: &(dyn Fn(&[DVec3], Shape) -> Vec<BoundingVolume> + Sync),
 ) -> (Vec<BoundingVolume>, Vec<Vec<Cell>>) {
     let grid = &solid.grid;
     // Cells the trials visited. Each trial's count is fixed by its volume and the round's
@@ -71,13 +75,17 @@ pub fn reshape(
     for c in &cells {
         cov.add(c);
     }
+    // A trial thinner than this can slip between layers of cell centres (a hull's radii are
+    // one scale, not its extent: its fit already holds the points it is judged on).
+    let thin = |v: &BoundingVolume| {
+        v.shape != Shape::Hull && v.radii.min_element() < MIN_SEMI_AXIS_CELLS * grid.h
+    };
     let mut out = volumes.to_vec();
     for i in 0..volumes.len() {
         if spent() {
             break;
         }
-        let thin = volumes[i].radii.min_element() < MIN_SEMI_AXIS_CELLS * grid.h;
-        if volumes[i].shape != Shape::Ellipsoid || points[i].is_empty() || thin {
+        if points[i].is_empty() {
             continue;
         }
         cov.remove(&cells[i]);
@@ -90,7 +98,7 @@ pub fn reshape(
         // covers more outside cells of its own than `own_limit`, or more than `bound` that no
         // other volume covers (it cannot win then: stop counting early).
         let score = |v: &BoundingVolume, bound: usize| {
-            if v.radii.min_element() < MIN_SEMI_AXIS_CELLS * grid.h {
+            if thin(v) {
                 return None;
             }
             let (mut marginal, mut own) = (0usize, 0usize);
@@ -104,10 +112,41 @@ pub fn reshape(
             visited.fetch_add(own as u64, Ordering::Relaxed);
             complete.then_some((marginal, own))
         };
-        let v = search(points[i], &volumes[i], min_r, score, &spent);
-        cells[i] = outside_cells(grid, &v);
+        let current = &volumes[i];
+        let marginal = cells[i].iter().filter(|c| !cov.covered(c)).count();
+        let mut best = (
+            current.clone(),
+            (marginal, cells[i].len()),
+            current.volume(),
+        );
+        let mut start = (current.shape == Shape::Ellipsoid && !thin(current)).then(|| best.clone());
+        let better = |a: &(BoundingVolume, (usize, usize), f64), s: (usize, usize), vol: f64| {
+            s < a.1 || (s == a.1 && vol < a.2 * (1.0 - 1e-9))
+        };
+        for v in fits(points[i], current.shape) {
+            let Some(s) = score(&v, best.1 .0) else {
+                continue;
+            };
+            let vol = v.volume();
+            if v.shape == Shape::Ellipsoid && start.is_none() {
+                start = Some((v.clone(), s, vol));
+            }
+            if better(&best, s, vol) {
+                best = (v, s, vol);
+            }
+        }
+        if let Some((from, _, _)) = start {
+            let (v, s) = search(points[i], &from, min_r, score, &spent);
+            let vol = v.volume();
+            if better(&best, s, vol) {
+                best = (v, s, vol);
+            }
+        }
+        out[i] = best.0;
+        if out[i] != volumes[i] {
+            cells[i] = outside_cells(grid, &out[i]);
+        }
         cov.add(&cells[i]);
-        out[i] = v;
     }
     (out, cells)
 }
@@ -136,16 +175,17 @@ fn hold(points: &[DVec3], c: DVec3, axes: DMat3, radii: DVec3, min_r: f64) -> Bo
 /// a relative 1e-9 to count). A trial scored `None` is rejected; `score` is told the best
 /// first entry so far, and may give up (`None`) on a trial that exceeds it. Each round scores the 18
 /// moves from the current best in parallel and takes the best of them (the first in move
-/// order on ties), so the result does not depend on the thread count.
+/// order on ties), so the result does not depend on the thread count. Returns the best
+/// volume and its score (`start`'s, `(usize::MAX, 0)`, when `start` itself is rejected).
 fn search(
     points: &[DVec3],
     start: &BoundingVolume,
     min_r: f64,
     score: impl Fn(&BoundingVolume, usize) -> Option<(usize, usize)> + Sync + Send,
     spent: &dyn Fn() -> bool,
-) -> BoundingVolume {
+) -> (BoundingVolume, (usize, usize)) {
     let Some(mut best_s) = score(start, usize::MAX) else {
-        return start.clone();
+        return (start.clone(), (usize::MAX, 0));
     };
     let mut best = start.clone();
     let mut best_vol = best.volume();
@@ -189,7 +229,7 @@ fn search(
             da *= 0.5;
         }
     }
-    best
+    (best, best_s)
 }
 
 #[cfg(test)]
@@ -234,8 +274,8 @@ mod tests {
             std::slice::from_ref(&mvee),
             cells,
             &[n],
-            0.5,
-            u64::MAX,
+            (0.5, u64::MAX),
+            &|_, _| Vec::new(),
         )
         .0[0]
             .clone();
@@ -282,8 +322,8 @@ mod tests {
             &[va, vb],
             cells,
             &counts,
-            0.5,
-            u64::MAX,
+            (0.5, u64::MAX),
+            &|_, _| Vec::new(),
         );
         let after = outside_volumes(g, &new, &counts);
         // The bars' volumes can reach along them into each other's space (measured: TOV
@@ -300,5 +340,50 @@ mod tests {
         for (v, pts) in new.iter().zip([&a, &b]) {
             assert!(pts.iter().all(|&p| v.gauge(p) <= 1.0 + 1e-9));
         }
+    }
+
+    #[test]
+    fn a_part_takes_the_kind_that_adds_least_to_the_union() {
+        // A bar; a large ball (another part's volume, held fixed) covers most of the space
+        // around it, and the end part's box sticks out beyond the ball where a smaller ball,
+        // inside the large one, would not.
+        let solid = Solid::new(Grid::from_inside_fn(
+            DVec3::splat(-1.0),
+            DVec3::new(21.0, 5.0, 5.0),
+            1.0,
+            |p| p.x >= 0.0 && p.x <= 20.0 && p.y >= 0.0 && p.y <= 4.0 && p.z >= 0.0 && p.z <= 4.0,
+        ));
+        let g = &solid.grid;
+        let end: Vec<DVec3> = g.points.iter().copied().filter(|p| p.x >= 18.0).collect();
+        let big = BoundingVolume::sphere(DVec3::new(10.0, 2.0, 2.0), 12.5);
+        let boxed = BoundingVolume::frame(
+            Shape::Obb,
+            DVec3::new(20.0, 2.0, 2.0),
+            DMat3::IDENTITY,
+            DVec3::splat(3.0),
+        );
+        let ball = BoundingVolume::sphere(DVec3::new(18.5, 2.0, 2.0), 3.3);
+        assert!(end.iter().all(|&p| boxed.contains(p) && ball.contains(p)));
+        let counts = [(g.points.len() - end.len()) as f64, end.len() as f64];
+        let volumes = [big, boxed];
+        let before = outside_volumes(g, &volumes, &counts);
+        let cells = volumes.iter().map(|v| outside_cells(g, v)).collect();
+        let offered = ball.clone();
+        let (new, _) = reshape(
+            &solid,
+            &[&[], &end],
+            &volumes,
+            cells,
+            &counts,
+            (0.5, u64::MAX),
+            &|_, except| {
+                assert_eq!(except, Shape::Obb);
+                vec![offered.clone()]
+            },
+        );
+        assert_eq!(new[0], volumes[0], "a part without points stays as it is");
+        assert_eq!(new[1], ball, "the ball adds nothing outside the union");
+        let after = outside_volumes(g, &new, &counts);
+        assert!(after.tov < before.tov, "{} -> {}", before.tov, after.tov);
     }
 }

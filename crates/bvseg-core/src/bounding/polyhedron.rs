@@ -8,6 +8,9 @@
 //! stays within the limit. Every plane supports the hull, so the result always encloses the
 //! points. A clip that would put a new vertex within [`MIN_EDGE`] of the diameter of an
 //! existing one is skipped, so no sliver face or needle edge appears.
+use std::cmp::{Ordering, Reverse};
+use std::collections::{BTreeMap, BinaryHeap, HashSet};
+
 use glam::DVec3;
 
 use super::hull::convex_hull;
@@ -23,6 +26,24 @@ const DONE: f64 = 1e-9;
 
 /// A convex polygon face, counter-clockwise seen from outside.
 type Face = Vec<DVec3>;
+
+/// A plane's depth, totally ordered.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Depth(f64);
+
+impl Eq for Depth {}
+
+impl PartialOrd for Depth {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Depth {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
 
 /// An enclosing hull of `points` with at most `max_vertices` vertices (at least 8 are
 /// allowed for, a box's), at least `min_r` across in every direction.
@@ -77,29 +98,42 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
         })
         .collect();
     let mut faces = box_faces(&obb);
-    let mut used = vec![false; planes.len()];
+    // Each plane's depth below the polyhedron's deepest vertex only falls as the polyhedron
+    // shrinks, so the depths found earlier bound the current ones, and a heap of them yields
+    // the planes deepest first (ties by index) while measuring only the few near the top.
+    let depth_of = |j: usize, verts: &[DVec3]| {
+        let (n, d) = planes[j];
+        verts
+            .iter()
+            .map(|&v| n.dot(v) - d)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let mut heap: BinaryHeap<(Depth, Reverse<usize>)> = {
+        let verts = vertices(&faces, diameter);
+        (0..planes.len())
+            .map(|j| (Depth(depth_of(j, &verts)), Reverse(j)))
+            .filter(|&(d, _)| d.0 > DONE * diameter)
+            .collect()
+    };
     loop {
         let verts = vertices(&faces, diameter);
-        let mut order: Vec<(f64, usize)> = planes
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| !used[j])
-            .map(|(j, &(n, d))| {
-                let depth = verts
-                    .iter()
-                    .map(|&v| n.dot(v) - d)
-                    .fold(f64::NEG_INFINITY, f64::max);
-                (depth, j)
-            })
-            .filter(|&(depth, _)| depth > DONE * diameter)
-            .collect();
-        if order.is_empty() {
-            break;
-        }
-        order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let mut clipped = None;
-        for &(_, j) in order.iter().take(TRIES) {
-            used[j] = true;
+        let mut tries = 0;
+        while tries < TRIES {
+            let Some((_, Reverse(j))) = heap.pop() else {
+                break;
+            };
+            let depth = Depth(depth_of(j, &verts));
+            if depth.0 <= DONE * diameter {
+                // Never deeper again: done with this plane.
+                continue;
+            }
+            if heap.peek().is_some_and(|&top| (depth, Reverse(j)) < top) {
+                heap.push((depth, Reverse(j)));
+                continue;
+            }
+            // The deepest plane left; tried once, whatever comes of it.
+            tries += 1;
             let (n, d) = planes[j];
             let next = clip(&faces, n, d, diameter);
             let nv = vertices(&next, diameter);
@@ -150,8 +184,42 @@ fn has_close_vertices(v: &[DVec3]) -> bool {
 }
 
 fn has_close_vertices_d(v: &[DVec3], diameter: f64) -> bool {
-    let min2 = (MIN_EDGE * diameter) * (MIN_EDGE * diameter);
-    (0..v.len()).any(|i| (i + 1..v.len()).any(|j| (v[i] - v[j]).length_squared() < min2))
+    let r = MIN_EDGE * diameter;
+    // A sweep along x: only pairs closer than `r` in x can be closer than `r`.
+    let mut order: Vec<usize> = (0..v.len()).collect();
+    order.sort_by(|&a, &b| v[a].x.total_cmp(&v[b].x));
+    (0..order.len()).any(|i| {
+        let p = v[order[i]];
+        order[i + 1..]
+            .iter()
+            .map(|&j| v[j])
+            .take_while(|q| q.x - p.x <= r)
+            .any(|q| (q - p).length_squared() < r * r)
+    })
+}
+
+/// Points ordered by x, to find one within `r` of a point by looking only at those within
+/// `r` in x (polyhedra with hundreds of vertices made the pairwise scans the cost of a fit).
+#[derive(Default)]
+struct Near {
+    by_x: BTreeMap<(Depth, u32), DVec3>,
+}
+
+impl Near {
+    /// The first inserted point (by insertion order) within `r` of `p`.
+    fn find(&self, p: DVec3, r: f64) -> Option<u32> {
+        let range = (Depth(p.x - r), 0)..=(Depth(p.x + r), u32::MAX);
+        self.by_x
+            .range(range)
+            .filter(|(_, &q)| (q - p).length_squared() <= r * r)
+            .map(|(&(_, i), _)| i)
+            .min()
+    }
+
+    /// Inserts `p` as the point numbered `i`.
+    fn insert(&mut self, i: u32, p: DVec3) {
+        self.by_x.insert((Depth(p.x), i), p);
+    }
 }
 
 /// The six faces of a box.
@@ -181,13 +249,18 @@ fn box_faces(b: &BoundingVolume) -> Vec<Face> {
     faces
 }
 
-/// The distinct vertices of the faces (points closer than a hair of the diameter are one).
+/// The distinct vertices of the faces (points closer than a hair of the diameter are one),
+/// in the order they first appear.
 fn vertices(faces: &[Face], diameter: f64) -> Vec<DVec3> {
-    let eps2 = (1e-12 * diameter) * (1e-12 * diameter);
+    let eps = 1e-12 * diameter;
+    let mut near = Near::default();
+    // Most repeats are the same bits (an edge's point is computed once for both its faces).
+    let mut seen: HashSet<[u64; 3]> = HashSet::new();
     let mut out: Vec<DVec3> = Vec::new();
     for f in faces {
         for &p in f {
-            if !out.iter().any(|&q| (q - p).length_squared() <= eps2) {
+            if seen.insert(p.to_array().map(f64::to_bits)) && near.find(p, eps).is_none() {
+                near.insert(out.len() as u32, p);
                 out.push(p);
             }
         }

@@ -78,8 +78,8 @@ fn union_protrusions(ctx: &Context, cur: &State) -> Vec<f64> {
     ctx.fitter.protrusions_of(&ctx.solid, list, &others)
 }
 
-/// `cur` with its ellipsoids reshaped to stick out less (see [`crate::reshaping`]), and
-/// measured again.
+/// `cur` with its volumes reshaped, or of another kind, to stick out less (see
+/// [`crate::reshaping`]), and measured again.
 fn reshaped(ctx: &Context, cur: State) -> State {
     let points: Vec<&[DVec3]> = cur.fits.iter().map(|f| f.hull.as_slice()).collect();
     let min_r = 0.5 * ctx.solid.grid.h;
@@ -91,10 +91,10 @@ fn reshaped(ctx: &Context, cur: State) -> State {
         &cur.volumes,
         cells,
         &counts,
-        min_r,
-        work_budget(&ctx.solid),
+        (min_r, work_budget(&ctx.solid)),
+        &|points, except| ctx.fitter.fits_of_other_kinds(&ctx.solid, points, except),
     );
-    // A reshaped ellipsoid may not reach farther from the surface than the larger of the
+    // A reshaped volume may not reach farther from the surface than the larger of the
     // fitted one's reach and the tolerance: where it would, the fitted one stays.
     let bound = ctx.tolerances().protrusion;
     let changed: Vec<usize> = (0..volumes.len())
