@@ -10,6 +10,7 @@
 //! existing one is skipped, so no sliver face or needle edge appears.
 use std::cmp::{Ordering, Reverse};
 use std::collections::{BTreeMap, BinaryHeap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
 
@@ -108,15 +109,12 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
             .map(|&v| n.dot(v) - d)
             .fold(f64::NEG_INFINITY, f64::max)
     };
-    let mut heap: BinaryHeap<(Depth, Reverse<usize>)> = {
-        let verts = vertices(&faces, diameter);
-        (0..planes.len())
-            .map(|j| (Depth(depth_of(j, &verts)), Reverse(j)))
-            .filter(|&(d, _)| d.0 > DONE * diameter)
-            .collect()
-    };
+    let mut verts = vertices(&faces, diameter);
+    let mut heap: BinaryHeap<(Depth, Reverse<usize>)> = (0..planes.len())
+        .map(|j| (Depth(depth_of(j, &verts)), Reverse(j)))
+        .filter(|&(d, _)| d.0 > DONE * diameter)
+        .collect();
     loop {
-        let verts = vertices(&faces, diameter);
         let mut clipped = None;
         let mut tries = 0;
         while tries < TRIES {
@@ -138,16 +136,15 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
             let next = clip(&faces, n, d, diameter);
             let nv = vertices(&next, diameter);
             if nv.len() <= max_vertices && nv.len() >= 4 && !has_close_vertices_d(&nv, diameter) {
-                clipped = Some(next);
+                clipped = Some((next, nv));
                 break;
             }
         }
         match clipped {
-            Some(f) => faces = f,
+            Some((f, v)) => (faces, verts) = (f, v),
             None => break,
         }
     }
-    let verts = vertices(&faces, diameter);
     let clipped = BoundingVolume::hull(&verts).map(|v| v.scaled_to_contain(finite.iter().copied()));
     // Every plane supports the hull, so the clipped box is inside the box; should round-off
     // ever have it otherwise, the box is the safe answer.
@@ -196,6 +193,29 @@ fn has_close_vertices_d(v: &[DVec3], diameter: f64) -> bool {
             .take_while(|q| q.x - p.x <= r)
             .any(|q| (q - p).length_squared() < r * r)
     })
+}
+
+/// A hasher for coordinates' bits (multiply-rotate, as rustc's FxHasher): the standard one
+/// was a sixth of the time of a 255-vertex fit.
+#[derive(Default)]
+struct BitsHasher(u64);
+
+impl Hasher for BitsHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut b = [0u8; 8];
+            b[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(b));
+        }
+    }
+
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
 }
 
 /// Points ordered by x, to find one within `r` of a point by looking only at those within
@@ -255,7 +275,7 @@ fn vertices(faces: &[Face], diameter: f64) -> Vec<DVec3> {
     let eps = 1e-12 * diameter;
     let mut near = Near::default();
     // Most repeats are the same bits (an edge's point is computed once for both its faces).
-    let mut seen: HashSet<[u64; 3]> = HashSet::new();
+    let mut seen: HashSet<[u64; 3], BuildHasherDefault<BitsHasher>> = HashSet::default();
     let mut out: Vec<DVec3> = Vec::new();
     for f in faces {
         for &p in f {
