@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the web viewer into web/dist/ without any tool that downloads at run time:
 #   1. cargo builds the viewer library for wasm32-unknown-unknown (no threads: the core's
-#      `parallel` feature is off there);
+#      `parallel` feature is off there), with egui and its text stack optimised for size;
 #   2. wasm-bindgen-cli, at exactly the wasm-bindgen version of Cargo.lock, writes the JS glue
 #      (installed with `cargo install` when missing; `--locked` would fail, one of its locked
 #      dependencies is not on the registry);
@@ -27,9 +27,18 @@ say "cargo build (wasm32-unknown-unknown, release)"
 if command -v rustup >/dev/null 2>&1; then
     rustup target add wasm32-unknown-unknown
 fi
+# egui (0.37) and its text stack (harfrust shaping, skrifa / read-fonts outlines) are built for
+# size: at opt-level 3 they put the module over its budget (6.1 MB). The core, and every other
+# crate, keeps the release profile's opt-level 3 (vello_cpu and fearless_simd too: their SIMD
+# fallback code needs inlining, and grows by 1.7 MB without it). Only this build: the native
+# viewer is built as the workspace's profile says.
+size_config=()
+for crate in egui epaint emath ecolor eframe egui_glow harfrust read-fonts skrifa font-types; do
+    size_config+=(--config "profile.release.package.$crate.opt-level=\"z\"")
+done
 # No debug info in the module: the workspace's release profile keeps some for native profiling.
 CARGO_PROFILE_RELEASE_DEBUG=0 \
-    cargo build --release --target wasm32-unknown-unknown -p bvseg-viewer --lib
+    cargo build --release --target wasm32-unknown-unknown -p bvseg-viewer --lib "${size_config[@]}"
 wasm="target/wasm32-unknown-unknown/release/bvseg_viewer.wasm"
 
 say "wasm-bindgen $version"

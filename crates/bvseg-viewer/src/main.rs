@@ -109,6 +109,18 @@ mod native {
                 .with_drag_and_drop(true),
             // The 3D view is depth-tested.
             depth_buffer: 24,
+            // X11 (XWayland in a Wayland session), as the glow backend is built for: winit also
+            // has its Wayland backend (egui-winit's accesskit turns it on) and would prefer it.
+            #[cfg(any(
+                target_os = "linux",
+                target_os = "dragonfly",
+                target_os = "freebsd",
+                target_os = "netbsd",
+                target_os = "openbsd"
+            ))]
+            event_loop_builder: Some(Box::new(|builder| {
+                winit::platform::x11::EventLoopBuilderExtX11::with_x11(builder);
+            })),
             ..Default::default()
         };
         let result = eframe::run_native(

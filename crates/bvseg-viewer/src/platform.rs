@@ -15,10 +15,16 @@ pub enum Report {
 /// Receives the app's [`Report`]s (the page writes them into the document; tests collect them).
 pub type Reporter = Box<dyn FnMut(&Report)>;
 
-/// Files picked in a browser file dialog, which arrive asynchronously, for the app to take on
-/// a later frame.
+/// Files picked in a browser file dialog or dropped on the page, which arrive asynchronously,
+/// for the app to take on a later frame; and what could not be read.
 #[derive(Clone, Default)]
-pub struct Inbox(Rc<RefCell<Vec<NamedBytes>>>);
+pub struct Inbox(Rc<RefCell<InboxContents>>);
+
+#[derive(Default)]
+struct InboxContents {
+    files: Vec<NamedBytes>,
+    failures: Vec<String>,
+}
 
 /// A file's name and content.
 pub type NamedBytes = (String, Vec<u8>);
@@ -26,17 +32,27 @@ pub type NamedBytes = (String, Vec<u8>);
 impl Inbox {
     /// Adds a file (name, bytes).
     pub fn push(&self, name: String, bytes: Vec<u8>) {
-        self.0.borrow_mut().push((name, bytes));
+        self.0.borrow_mut().files.push((name, bytes));
     }
 
     /// Takes every file that has arrived.
     pub fn take(&self) -> Vec<NamedBytes> {
-        std::mem::take(&mut *self.0.borrow_mut())
+        std::mem::take(&mut self.0.borrow_mut().files)
+    }
+
+    /// Adds the one-line message of a file that could not be read.
+    pub fn push_failure(&self, msg: String) {
+        self.0.borrow_mut().failures.push(msg);
+    }
+
+    /// Takes the messages of the files that could not be read.
+    pub fn take_failures(&self) -> Vec<String> {
+        std::mem::take(&mut self.0.borrow_mut().failures)
     }
 }
 
 #[cfg(target_arch = "wasm32")]
-pub use web::{download, pick_file, widget_rect};
+pub use web::{download, pick_file, read_dropped, widget_rect};
 
 /// Remembers where the widget called `label` was drawn in this frame. eframe's web backend has
 /// no accessibility tree, so a browser test finds the widgets it clicks through this record
@@ -144,6 +160,23 @@ mod web {
         on_change.forget();
         input.click();
         Ok(())
+    }
+
+    /// Reads a file dropped on the page (the browser reads files asynchronously): its bytes, or
+    /// what went wrong, arrive in `inbox`, and `ctx` is asked to repaint so the app sees them.
+    pub fn read_dropped(
+        inbox: Inbox,
+        ctx: egui::Context,
+        name: String,
+        file: egui::DroppedFileHandle,
+    ) {
+        wasm_bindgen_futures::spawn_local(async move {
+            match file.bytes_async().await {
+                Ok(bytes) => inbox.push(name, bytes),
+                Err(e) => inbox.push_failure(format!("{name}: cannot read the file: {e}")),
+            }
+            ctx.request_repaint();
+        });
     }
 
     fn log_error(msg: &str) {

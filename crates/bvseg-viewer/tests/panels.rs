@@ -9,8 +9,9 @@ use bvseg_core::{Kinds, Params, Shape, Target};
 use bvseg_viewer::app::{Export, StartMesh, StartOptions, Status, ViewerApp};
 use bvseg_viewer::platform::Report;
 use eframe::egui::accesskit::Role;
-use egui_kittest::kittest::{Key, Queryable};
-use egui_kittest::Harness;
+use eframe::egui::Key;
+use egui_kittest::kittest::Queryable;
+use egui_kittest::{Harness, Node};
 
 fn harness(mesh: &str) -> (Harness<'static, ViewerApp>, Rc<RefCell<Vec<Report>>>) {
     let reports = Rc::new(RefCell::new(Vec::new()));
@@ -25,17 +26,37 @@ fn harness(mesh: &str) -> (Harness<'static, ViewerApp>, Rc<RefCell<Vec<Report>>>
     });
     let h = Harness::builder()
         .with_size([1280.0, 900.0])
-        .build_state(|ctx, app: &mut ViewerApp| app.ui(ctx), app);
+        .build_ui_state(|ui, app: &mut ViewerApp| app.ui(ui), app);
     (h, reports)
+}
+
+/// Types `text` into the widget labelled `label`, focusing it first.
+fn type_into(h: &Harness<'_, ViewerApp>, label: &str, text: &str) {
+    let node = h.get_by_label(label);
+    node.focus();
+    node.type_text(text);
+}
+
+/// Presses `keys` one after the other in the widget `node`, focusing it first.
+fn press_keys(h: &Harness<'_, ViewerApp>, node: Node<'_>, keys: &[Key]) {
+    node.focus();
+    for &key in keys {
+        h.key_press(key);
+    }
+}
+
+/// The slider labelled `label` (egui labels the slider and the value field beside it alike).
+fn slider<'h>(h: &'h Harness<'_, ViewerApp>, label: &'h str) -> Node<'h> {
+    h.get_by_role_and_label(Role::Slider, label)
 }
 
 /// Types `text` into the DragValue labelled `label` (a click selects its text).
 fn enter(h: &mut Harness<'_, ViewerApp>, label: &str, text: &str) {
     h.get_by_label(label).click();
     h.run_steps(2);
-    h.get_by_label(label).type_text(text);
+    type_into(h, label, text);
     h.run_steps(1);
-    h.get_by_label(label).press_keys(&[Key::Enter]);
+    press_keys(h, h.get_by_label(label), &[Key::Enter]);
     h.run_steps(2);
 }
 
@@ -112,10 +133,10 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     // The history slider steps back to the first step.
     let n = h.state().session().unwrap().snapshots().len();
     assert_eq!(h.state().shown_step(), Some(n - 1));
-    h.get_by_label("History step").focus();
+    slider(&h, "History step").focus();
     h.run_steps(1);
     for _ in 0..n {
-        h.get_by_label("History step").press_keys(&[Key::ArrowLeft]);
+        press_keys(&h, slider(&h, "History step"), &[Key::ArrowLeft]);
         h.run_steps(1);
     }
     assert_eq!(h.state().shown_step(), Some(0));
@@ -136,9 +157,9 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     h.get_by_label(field).focus();
     h.run_steps(1);
     // The field holds a default name, with the cursor at its end: clear it.
-    h.get_by_label(field).press_keys(&[Key::Backspace; 40]);
+    press_keys(&h, h.get_by_label(field), &[Key::Backspace; 40]);
     h.run_steps(1);
-    h.get_by_label(field).type_text(out.to_str().unwrap());
+    type_into(&h, field, out.to_str().unwrap());
     h.run_steps(1);
     h.get_by_label("Save").click();
     h.run_steps(2);
@@ -185,11 +206,10 @@ fn the_kinds_control_sets_the_runs_kinds() {
     assert_eq!(p.kinds, Kinds::PRIMITIVES.with(Shape::Hull));
     assert_eq!(p.max_hull_vertices, 32);
     assert_eq!(preset_shown(&h), "primitives + hull");
-    h.get_by_label("Max hull vertices").focus();
+    slider(&h, "Max hull vertices").focus();
     h.run_steps(1);
     for _ in 0..3 {
-        h.get_by_label("Max hull vertices")
-            .press_keys(&[Key::ArrowRight]);
+        press_keys(&h, slider(&h, "Max hull vertices"), &[Key::ArrowRight]);
         h.run_steps(1);
     }
     assert_eq!(h.state().settings().params().max_hull_vertices, 35);
@@ -399,7 +419,7 @@ fn open_through_dialog(h: &mut Harness<'_, ViewerApp>, path: &std::path::Path) {
     let field = "Path of a mesh file (.obj, .gltf, .glb, .stl):";
     h.get_by_label(field).focus();
     h.run_steps(1);
-    h.get_by_label(field).type_text(path.to_str().unwrap());
+    type_into(h, field, path.to_str().unwrap());
     h.run_steps(1);
     h.get_by_label("Open").click();
     h.run_steps(2);

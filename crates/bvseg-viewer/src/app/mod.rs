@@ -435,9 +435,16 @@ impl ViewerApp {
         }
     }
 
-    /// One frame of the UI (without eframe, so the tests can drive it).
-    pub fn ui(&mut self, ctx: &egui::Context) {
-        self.take_files(ctx);
+    /// One frame (without eframe, so the tests can drive it): [`Self::logic`], then the
+    /// panels in `ui`, which should cover the window.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        self.logic(ui.ctx());
+        self.show(ui);
+    }
+
+    /// The work of a frame that draws nothing: starts a pending run and advances the running
+    /// one. eframe also calls it while the window is hidden (minimised), so a run goes on.
+    pub fn logic(&mut self, ctx: &egui::Context) {
         if std::mem::take(&mut self.pending_run) {
             self.run();
         }
@@ -445,42 +452,50 @@ impl ViewerApp {
         if self.status == Status::Running {
             ctx.request_repaint();
         }
-        egui::TopBottomPanel::top("menu").show(ctx, |ui| self.menu_bar(ui));
-        egui::SidePanel::left("controls")
-            .resizable(true)
-            .default_width(250.0)
-            .show(ctx, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
-            });
-        egui::SidePanel::right("statistics")
-            .resizable(true)
-            .default_width(250.0)
-            .show(ctx, |ui| self.statistics(ui));
-        egui::CentralPanel::default()
-            .frame(egui::Frame::NONE)
-            .show(ctx, |ui| self.view(ui));
-        #[cfg(not(target_arch = "wasm32"))]
-        self.native_dialogs(ctx);
     }
 
+    /// The panels: menu bar, controls, statistics, and the 3D view in the middle.
+    fn show(&mut self, ui: &mut egui::Ui) {
+        self.take_files(ui.ctx());
+        egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
+        egui::Panel::left("controls")
+            .resizable(true)
+            .default_size(250.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+            });
+        egui::Panel::right("statistics")
+            .resizable(true)
+            .default_size(250.0)
+            .show(ui, |ui| self.statistics(ui));
+        egui::CentralPanel::no_frame().show(ui, |ui| self.view(ui));
+        #[cfg(not(target_arch = "wasm32"))]
+        self.native_dialogs(ui.ctx());
+    }
+
+    /// Loads the files that arrived: picked in the browser's dialog, or dropped on the window.
+    /// With several at once, the last one wins.
     fn take_files(&mut self, ctx: &egui::Context) {
+        for msg in self.inbox.take_failures() {
+            self.fail(msg);
+        }
         let mut files = self.inbox.take();
         let dropped = ctx.input(|i| i.raw.dropped_files.clone());
         for f in dropped {
-            if let Some(bytes) = f.bytes {
-                files.push((f.name, bytes.to_vec()));
-            } else if let Some(path) = f.path {
-                let name = path.file_name().map_or_else(
-                    || path.display().to_string(),
-                    |n| n.to_string_lossy().into(),
-                );
-                match std::fs::read(&path) {
-                    Ok(b) => files.push((name, b)),
-                    Err(e) => self.fail(format!("{}: cannot read: {e}", path.display())),
-                }
+            let path = f.path();
+            let name = path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into(),
+            );
+            // Natively the file is read here; in the browser it arrives in the inbox later.
+            #[cfg(not(target_arch = "wasm32"))]
+            match f.bytes() {
+                Ok(b) => files.push((name, b)),
+                Err(e) => self.fail(format!("{}: cannot read: {e}", path.display())),
             }
+            #[cfg(target_arch = "wasm32")]
+            crate::platform::read_dropped(self.inbox.clone(), ctx.clone(), name, f.clone());
         }
-        // With several files dropped at once, the last one wins.
         if let Some((name, bytes)) = files.pop() {
             self.load_bytes(&name, &bytes);
         }
@@ -510,8 +525,12 @@ impl ViewerApp {
 }
 
 impl eframe::App for ViewerApp {
-    fn update(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
-        self.ui(ctx);
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        ViewerApp::logic(self, ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.show(ui);
     }
 
     fn on_exit(&mut self, gl: Option<&glow::Context>) {

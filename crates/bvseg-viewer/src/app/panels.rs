@@ -11,12 +11,12 @@ use crate::scene::{self, VolumeStyle};
 
 impl ViewerApp {
     pub(super) fn menu_bar(&mut self, ui: &mut egui::Ui) {
-        egui::menu::bar(ui, |ui| {
+        egui::MenuBar::new().ui(ui, |ui| {
             let menu = ui.menu_button("Mesh", |ui| {
                 for m in BUNDLED {
                     if ui.button(m.name).on_hover_text(m.about).clicked() {
                         self.load_bytes(m.file, m.bytes);
-                        ui.close_menu();
+                        ui.close();
                     }
                 }
                 ui.separator();
@@ -24,7 +24,7 @@ impl ViewerApp {
                 note_widget("Open file…", open.rect);
                 if open.clicked() {
                     self.open_file(ui.ctx());
-                    ui.close_menu();
+                    ui.close();
                 }
             });
             note_widget("Mesh", menu.response.rect);
@@ -36,7 +36,7 @@ impl ViewerApp {
                     note_widget(label, button.rect);
                     if button.clicked() {
                         self.export(export);
-                        ui.close_menu();
+                        ui.close();
                     }
                 }
             });
@@ -319,7 +319,7 @@ impl ViewerApp {
         let enabled = ui.is_enabled();
         combo.response.widget_info(|| egui::WidgetInfo {
             current_text_value: Some(current.into()),
-            ..egui::WidgetInfo::labeled(egui::WidgetType::ComboBox, enabled, "Preset")
+            ..egui::WidgetInfo::labeled(egui::Role::ComboBox, enabled, "Preset")
         });
         note_widget("Preset", combo.response.rect);
     }
