@@ -49,13 +49,14 @@ const MIN_SEMI_AXIS_CELLS: f64 = 1.5;
 /// cells to the union of the others. The candidates are the volume itself,
 /// `fits(points[i], shape)` (the fits of every other kind the run allows: a part whose own
 /// best kind leaves outside space that no neighbour covers can switch to one that overlaps
-/// its neighbours), and the reshaped ellipsoid searched from the best ellipsoid among them. `points[i]` are the points
-/// volume `i` must hold (its part's enclosure or convex-hull points), `cells[i]` its outside
-/// cells (see [`outside_cells`]), `counts[i]` the number of samples in its part; `min_r` is
-/// the smallest semi-axis allowed. The trials may visit `budget` outside cells in all: the
-/// search stops, keeping the best volume so far, at the end of the round that spent it (a
-/// volume spanning a lattice of mostly empty cells would otherwise take seconds per round).
-/// Returns the new volumes and their outside cells, in the same order.
+/// its neighbours), and the reshaped ellipsoid searched from the best ellipsoid among them.
+/// `points[i]` are the points volume `i` must hold (its part's enclosure or convex-hull
+/// points), `cells[i]` its outside cells (see [`outside_cells`]), `counts[i]` the number of
+/// samples in its part; `min_r` is the smallest semi-axis allowed. The trials may visit
+/// `budget` outside cells in all: the search stops, keeping the best volume so far, at the
+/// end of the round that spent it (a volume spanning a lattice of mostly empty cells would
+/// otherwise take seconds per round). Returns the new volumes and their outside cells, in the
+/// same order.
 pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
