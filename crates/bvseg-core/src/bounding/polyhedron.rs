@@ -28,19 +28,25 @@ const DONE: f64 = 1e-9;
 /// A convex polygon face, counter-clockwise seen from outside.
 type Face = Vec<DVec3>;
 
-/// A plane's depth, totally ordered.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Depth(f64);
+/// A number totally ordered (a plane's depth in the heap, a coordinate in [`Near`]).
+#[derive(Debug, Clone, Copy)]
+struct Ordered(f64);
 
-impl Eq for Depth {}
+impl PartialEq for Ordered {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
 
-impl PartialOrd for Depth {
+impl Eq for Ordered {}
+
+impl PartialOrd for Ordered {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }
 }
 
-impl Ord for Depth {
+impl Ord for Ordered {
     fn cmp(&self, other: &Self) -> Ordering {
         self.0.total_cmp(&other.0)
     }
@@ -110,8 +116,8 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
             .fold(f64::NEG_INFINITY, f64::max)
     };
     let mut verts = vertices(&faces, diameter);
-    let mut heap: BinaryHeap<(Depth, Reverse<usize>)> = (0..planes.len())
-        .map(|j| (Depth(depth_of(j, &verts)), Reverse(j)))
+    let mut heap: BinaryHeap<(Ordered, Reverse<usize>)> = (0..planes.len())
+        .map(|j| (Ordered(depth_of(j, &verts)), Reverse(j)))
         .filter(|&(d, _)| d.0 > DONE * diameter)
         .collect();
     loop {
@@ -121,7 +127,7 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
             let Some((_, Reverse(j))) = heap.pop() else {
                 break;
             };
-            let depth = Depth(depth_of(j, &verts));
+            let depth = Ordered(depth_of(j, &verts));
             if depth.0 <= DONE * diameter {
                 // Never deeper again: done with this plane.
                 continue;
@@ -222,13 +228,13 @@ impl Hasher for BitsHasher {
 /// `r` in x (polyhedra with hundreds of vertices made the pairwise scans the cost of a fit).
 #[derive(Default)]
 struct Near {
-    by_x: BTreeMap<(Depth, u32), DVec3>,
+    by_x: BTreeMap<(Ordered, u32), DVec3>,
 }
 
 impl Near {
     /// The first inserted point (by insertion order) within `r` of `p`.
     fn find(&self, p: DVec3, r: f64) -> Option<u32> {
-        let range = (Depth(p.x - r), 0)..=(Depth(p.x + r), u32::MAX);
+        let range = (Ordered(p.x - r), 0)..=(Ordered(p.x + r), u32::MAX);
         self.by_x
             .range(range)
             .filter(|(_, &q)| (q - p).length_squared() <= r * r)
@@ -238,7 +244,7 @@ impl Near {
 
     /// Inserts `p` as the point numbered `i`.
     fn insert(&mut self, i: u32, p: DVec3) {
-        self.by_x.insert((Depth(p.x), i), p);
+        self.by_x.insert((Ordered(p.x), i), p);
     }
 }
 
