@@ -232,14 +232,12 @@ struct Near {
 }
 
 impl Near {
-    /// The first inserted point (by insertion order) within `r` of `p`.
-    fn find(&self, p: DVec3, r: f64) -> Option<u32> {
+    /// Whether a point within `r` of `p` was inserted.
+    fn any_within(&self, p: DVec3, r: f64) -> bool {
         let range = (Ordered(p.x - r), 0)..=(Ordered(p.x + r), u32::MAX);
         self.by_x
             .range(range)
-            .filter(|(_, &q)| (q - p).length_squared() <= r * r)
-            .map(|(&(_, i), _)| i)
-            .min()
+            .any(|(_, &q)| (q - p).length_squared() <= r * r)
     }
 
     /// Inserts `p` as the point numbered `i`.
@@ -285,7 +283,7 @@ fn vertices(faces: &[Face], diameter: f64) -> Vec<DVec3> {
     let mut out: Vec<DVec3> = Vec::new();
     for f in faces {
         for &p in f {
-            if seen.insert(p.to_array().map(f64::to_bits)) && near.find(p, eps).is_none() {
+            if seen.insert(p.to_array().map(f64::to_bits)) && !near.any_within(p, eps) {
                 near.insert(out.len() as u32, p);
                 out.push(p);
             }
