@@ -12,7 +12,7 @@ use glam::DVec3;
 
 use crate::bounding::hull::hull_points;
 use crate::enclosure::Enclosure;
-use crate::metrics::{outside_cells, protrusion_capped, Cell, SurfaceDistance};
+use crate::metrics::{outside_cells, outside_count, protrusion_capped, Cell, SurfaceDistance};
 use crate::moments::Moments;
 use crate::partition::Solid;
 use crate::{BoundingVolume, Cancel, Kinds, Mesh, Shape};
@@ -188,17 +188,18 @@ impl Fitter {
         self.kinds
     }
 
-    /// The best of the kinds' volumes for `points` (see the type's docs) and its outside
-    /// cells.
-    fn choose(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> (BoundingVolume, Vec<Cell>) {
+    /// The best of the kinds' volumes for `points` (see the type's docs) and its number of
+    /// outside cells. The kinds are judged by their counts; only the chosen one's cells are
+    /// listed, by the caller that needs them.
+    fn choose(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> (BoundingVolume, usize) {
         let min_r = 0.5 * solid.grid.h;
-        let mut best: Option<(BoundingVolume, Vec<Cell>)> = None;
+        let mut best: Option<(BoundingVolume, usize)> = None;
         for shape in kinds.shapes() {
             let v = crate::bounding::fit(shape, points, min_r, self.max_hull_vertices);
-            let cells = outside_cells(&solid.grid, &v);
+            let cells = outside_count(&solid.grid, &v);
             let better = best
                 .as_ref()
-                .is_none_or(|(b, bc)| (cells.len(), v.volume()) < (bc.len(), b.volume()));
+                .is_none_or(|(b, bc)| (cells, v.volume()) < (*bc, b.volume()));
             if better {
                 best = Some((v, cells));
             }
@@ -206,14 +207,15 @@ impl Fitter {
         // `Params::validate` keeps the set non-empty; an empty one still gets a volume.
         best.unwrap_or_else(|| {
             let v = crate::bounding::fit(crate::Shape::Ellipsoid, points, min_r, 32);
-            let cells = outside_cells(&solid.grid, &v);
+            let cells = outside_count(&solid.grid, &v);
             (v, cells)
         })
     }
 
     fn make(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> Fit {
         let hull = hull_points(points);
-        let (volume, outside) = self.choose(solid, &hull, kinds);
+        let (volume, _) = self.choose(solid, &hull, kinds);
+        let outside = outside_cells(&solid.grid, &volume);
         crate::work::add(points.len() + outside.len());
         self.cells
             .fetch_add(outside.len() as u64, Ordering::Relaxed);

@@ -252,6 +252,23 @@ fn columns_in(
     true
 }
 
+/// Number of cells of both lattices outside the solid whose centres `v` contains: the
+/// length of [`outside_cells`], counted per column from the solid's runs.
+pub fn outside_count(grid: &Grid, v: &BoundingVolume) -> usize {
+    let offset_origin = grid.origin + DVec3::splat(0.5 * grid.h);
+    let mut n = 0;
+    for (origin, runs) in [
+        (grid.origin, &grid.inside_runs[0]),
+        (offset_origin, &grid.inside_runs[1]),
+    ] {
+        columns_in(origin, grid.h, v, |i, j, k0, k1| {
+            n += (k1 - k0 + 1) as usize - runs.count([i, j], [k0, k1]);
+            true
+        });
+    }
+    n
+}
+
 /// Cells of both lattices outside the solid whose centres `v` contains (see
 /// [`for_each_outside_cell`]).
 pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<Cell> {
@@ -349,6 +366,26 @@ mod tests {
             BoundingVolume::cylinder(c, axes.z_axis, 0.6, 0.45),
             BoundingVolume::hull(&hull_pts).unwrap(),
         ]
+    }
+
+    #[test]
+    fn the_count_of_outside_cells_is_the_length_of_their_list() {
+        // A holey solid, so columns hold several runs; volumes reaching past the lattice.
+        let g = Grid::from_inside_fn(DVec3::splat(-0.6), DVec3::splat(0.6), 0.04, |p| {
+            p.length() <= 0.6 && (p * 9.0).x.sin() * (p * 7.0).z.cos() < 0.4
+        });
+        for v in every_kind() {
+            for s in [0.3, 0.7, 1.0, 1.6] {
+                let mut w = v.clone();
+                w.radii *= s;
+                assert_eq!(
+                    outside_count(&g, &w),
+                    outside_cells(&g, &w).len(),
+                    "{:?} x {s}",
+                    w.shape
+                );
+            }
+        }
     }
 
     #[test]
