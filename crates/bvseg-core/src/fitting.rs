@@ -178,9 +178,7 @@ impl Fitter {
     ) -> Vec<BoundingVolume> {
         let min_r = 0.5 * solid.grid.h;
         let shapes: Vec<Shape> = self.kinds.shapes().filter(|&s| s != except).collect();
-        crate::parallel::map(&shapes, |&s| {
-            crate::bounding::fit(s, points, min_r, self.max_hull_vertices)
-        })
+        crate::bounding::fit_each(&shapes, points, min_r, self.max_hull_vertices)
     }
 
     /// This fitter's kinds.
@@ -193,10 +191,11 @@ impl Fitter {
     /// listed, by the caller that needs them.
     fn choose(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> (BoundingVolume, usize) {
         let min_r = 0.5 * solid.grid.h;
+        let shapes: Vec<Shape> = kinds.shapes().collect();
+        let fits = crate::bounding::fit_each(&shapes, points, min_r, self.max_hull_vertices);
+        let counts = crate::parallel::map(&fits, |v| outside_count(&solid.grid, v));
         let mut best: Option<(BoundingVolume, usize)> = None;
-        for shape in kinds.shapes() {
-            let v = crate::bounding::fit(shape, points, min_r, self.max_hull_vertices);
-            let cells = outside_count(&solid.grid, &v);
+        for (v, cells) in fits.into_iter().zip(counts) {
             let better = best
                 .as_ref()
                 .is_none_or(|(b, bc)| (cells, v.volume()) < (*bc, b.volume()));

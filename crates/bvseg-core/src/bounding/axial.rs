@@ -11,6 +11,9 @@
 //! directions with shrinking steps. The search judges a capsule by the one of radius `R`
 //! (one pass over the points instead of a radius search); the best directions then get
 //! their best radius.
+use std::cell::RefCell;
+use std::collections::HashMap;
+
 use glam::{DMat3, DVec2, DVec3};
 
 use super::ball::{finite_shuffled, min_circle_in_order};
@@ -40,8 +43,50 @@ pub enum Axial {
 /// A near-minimum-volume capsule or cylinder holding `points` (finite ones), radius and
 /// half-length at least `min_r` (a capsule's half-length may be 0).
 pub fn min_axial(points: &[DVec3], kind: Axial, min_r: f64) -> BoundingVolume {
-    // One shuffle for all the projections' circles.
     let p: Vec<DVec3> = finite_shuffled(points);
+    search(&Circles::new(&p), kind, min_r)
+}
+
+/// The capsule and the cylinder of [`min_axial`], in that order: the two searches share the
+/// circles of the directions both try (every seed, and the first steps from a shared one).
+pub fn min_capsule_and_cylinder(points: &[DVec3], min_r: f64) -> [BoundingVolume; 2] {
+    let p: Vec<DVec3> = finite_shuffled(points);
+    let circles = Circles::new(&p);
+    [Axial::Capsule, Axial::Cylinder].map(|kind| search(&circles, kind, min_r))
+}
+
+/// The points (shuffled once for all the projections' circles) and the minimum circle of
+/// their projection across each direction tried so far, by the direction's bits.
+struct Circles<'a> {
+    p: &'a [DVec3],
+    known: RefCell<HashMap<[u64; 3], (DVec2, f64)>>,
+}
+
+impl<'a> Circles<'a> {
+    fn new(p: &'a [DVec3]) -> Self {
+        Self {
+            p,
+            known: RefCell::default(),
+        }
+    }
+
+    /// The minimum circle (centre, radius) of the points projected on `(u, w)`, the basis
+    /// [`across`] gives for `a`.
+    fn of(&self, a: DVec3, flat: &[DVec2]) -> (DVec2, f64) {
+        let key = a.to_array().map(f64::to_bits);
+        if let Some(&c) = self.known.borrow().get(&key) {
+            return c;
+        }
+
+        let c = min_circle_in_order(flat);
+        self.known.borrow_mut().insert(key, c);
+        c
+    }
+}
+
+/// The search of [`min_axial`] over directions, on `circles`' points.
+fn search(circles: &Circles, kind: Axial, min_r: f64) -> BoundingVolume {
+    let p = circles.p;
     if p.is_empty() {
         let unit = match kind {
             Axial::Capsule => BoundingVolume::capsule(DVec3::ZERO, DVec3::Z, 0.0, min_r),
@@ -49,19 +94,19 @@ pub fn min_axial(points: &[DVec3], kind: Axial, min_r: f64) -> BoundingVolume {
         };
         return unit;
     }
-    let seeds = seeds(&p);
-    let quick = |a: DVec3| fit_with(&p, a, kind, min_r, false).volume();
+    let seeds = seeds(p);
+    let quick = |a: DVec3| fit_with(circles, a, kind, min_r, false).volume();
     let mut scored: Vec<(f64, DVec3)> = seeds.into_iter().map(|a| (quick(a), a)).collect();
     scored.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut best: Option<BoundingVolume> = None;
     for &(v0, a0) in scored.iter().take(REFINED) {
         let (_, a) = refine(a0, v0, quick);
-        let v = fit_along(&p, a, kind, min_r);
+        let v = fit_with(circles, a, kind, min_r, true);
         if best.as_ref().is_none_or(|b| v.volume() < b.volume()) {
             best = Some(v);
         }
     }
-    best.unwrap_or_else(|| fit_along(&p, DVec3::Z, kind, min_r))
+    best.unwrap_or_else(|| fit_with(circles, DVec3::Z, kind, min_r, true))
         .scaled_to_contain(p.iter().copied())
 }
 
@@ -144,16 +189,25 @@ fn seeds(p: &[DVec3]) -> Vec<DVec3> {
 }
 
 /// The best capsule or cylinder along the unit direction `a`.
-pub fn fit_along(p: &[DVec3], a: DVec3, kind: Axial, min_r: f64) -> BoundingVolume {
-    fit_with(p, a, kind, min_r, true)
+#[cfg(test)]
+fn fit_along(p: &[DVec3], a: DVec3, kind: Axial, min_r: f64) -> BoundingVolume {
+    fit_with(&Circles::new(p), a, kind, min_r, true)
 }
 
-/// [`fit_along`], with a capsule's radius searched (`search_radius`) or the axis circle's.
-fn fit_with(p: &[DVec3], a: DVec3, kind: Axial, min_r: f64, search_radius: bool) -> BoundingVolume {
+/// [`fit_along`] on `circles`' points, with a capsule's radius searched (`search_radius`)
+/// or the axis circle's.
+fn fit_with(
+    circles: &Circles,
+    a: DVec3,
+    kind: Axial,
+    min_r: f64,
+    search_radius: bool,
+) -> BoundingVolume {
+    let p = circles.p;
     let u = a.any_orthonormal_vector();
     let w = a.cross(u);
     let flat: Vec<DVec2> = p.iter().map(|&q| DVec2::new(q.dot(u), q.dot(w))).collect();
-    let (c2, circle) = min_circle_in_order(&flat);
+    let (c2, circle) = circles.of(a, &flat);
     let big_r = circle.max(min_r);
     let z: Vec<f64> = p.iter().map(|&q| q.dot(a)).collect();
     let (zlo, zhi) = z

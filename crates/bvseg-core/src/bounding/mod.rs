@@ -30,6 +30,42 @@ pub fn fit(shape: Shape, points: &[DVec3], min_r: f64, max_hull_vertices: usize)
     }
 }
 
+/// The volumes of each of `shapes` (in their order) fitted to `points`, as [`fit`] gives
+/// them; the kinds are fitted in parallel, the capsule and the cylinder as one search
+/// (see [`axial::min_capsule_and_cylinder`]).
+pub fn fit_each(
+    shapes: &[Shape],
+    points: &[DVec3],
+    min_r: f64,
+    max_hull_vertices: usize,
+) -> Vec<BoundingVolume> {
+    let both = shapes.contains(&Shape::Capsule) && shapes.contains(&Shape::Cylinder);
+    // One job per kind, but one for the pair when both are asked for.
+    let jobs: Vec<Shape> = shapes
+        .iter()
+        .copied()
+        .filter(|&s| !(both && s == Shape::Cylinder))
+        .collect();
+    let fitted = crate::parallel::map(&jobs, |&s| match s {
+        Shape::Capsule if both => axial::min_capsule_and_cylinder(points, min_r).to_vec(),
+        _ => vec![fit(s, points, min_r, max_hull_vertices)],
+    });
+    let mut done: Vec<(Shape, BoundingVolume)> = Vec::with_capacity(shapes.len());
+    for (&s, vs) in jobs.iter().zip(fitted) {
+        let kinds = if vs.len() == 2 {
+            [Shape::Capsule, Shape::Cylinder].as_slice()
+        } else {
+            std::slice::from_ref(&s)
+        };
+        done.extend(kinds.iter().copied().zip(vs));
+    }
+    shapes
+        .iter()
+        .filter_map(|s| done.iter().position(|(d, _)| d == s))
+        .map(|i| done[i].1.clone())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -47,6 +83,22 @@ mod tests {
         };
         let here = mvee::tests::same_on_threads(digest);
         assert_eq!(here, GOLDEN, "digest {here:#x}");
+    }
+
+    #[test]
+    fn fitting_kinds_together_gives_each_kind_fitted_alone() {
+        let pts = hull::hull_points(&mvee::tests::portable_blob(5, 800));
+        let alone = |s: Shape| fit(s, &pts, 1e-6, 32);
+        for shapes in [
+            Shape::ALL.to_vec(),
+            vec![Shape::Cylinder, Shape::Sphere, Shape::Capsule],
+            vec![Shape::Capsule],
+            vec![Shape::Hull, Shape::Cylinder],
+        ] {
+            let together = fit_each(&shapes, &pts, 1e-6, 32);
+            let each: Vec<BoundingVolume> = shapes.iter().map(|&s| alone(s)).collect();
+            assert_eq!(together, each, "{shapes:?}");
+        }
     }
 
     const GOLDEN: u64 = 0xf0a3_9b7b_3ac2_fe12;
