@@ -28,6 +28,25 @@ pub struct Hull {
 }
 
 impl Hull {
+    /// The enclosed volume (0 for a flat or smaller hull).
+    pub fn volume(&self) -> f64 {
+        if self.dim < 3 {
+            return 0.0;
+        }
+        let Some(&o) = self.vertices.first() else {
+            return 0.0;
+        };
+        let six: f64 = self
+            .faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i| self.vertices[i as usize] - o);
+                a.dot(b.cross(c))
+            })
+            .sum();
+        (six / 6.0).max(0.0)
+    }
+
     /// Unit outward normal and area of face `f` (zero normal for a degenerate triangle).
     pub fn face_normal_area(&self, f: usize) -> (DVec3, f64) {
         let [a, b, c] = self.faces[f].map(|i| self.vertices[i as usize]);
