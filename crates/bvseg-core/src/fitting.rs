@@ -30,6 +30,8 @@ pub struct Fit {
     pub volume: BoundingVolume,
     /// Lattice cells outside the solid whose centres the volume contains.
     pub outside: Vec<Cell>,
+    /// The kinds it was chosen among, each with the number of outside cells its volume had.
+    pub counts: Vec<(Shape, usize)>,
     /// The volume's own protrusion (see [`crate::metrics::protrusion`]), measured when first
     /// asked for: only the fits of states the refinement judges need it.
     protrusion: OnceLock<f64>,
@@ -86,10 +88,26 @@ struct FitCache {
     young_bytes: usize,
 }
 
+/// Outside cells that any kind may have beyond the best one's and stay in contention (see
+/// [`Fit::contenders`]): parts with almost none differ by a handful of cells.
+const FEW_CELLS: f64 = 4.0;
+
 /// Memory budget of one cache generation.
 const CACHE_BYTES: usize = 96 << 20;
 
 impl Fit {
+    /// The kinds it was chosen among whose volumes had at most `1 + slack` times the chosen
+    /// one's outside cells, and a few more: the kinds in contention for the part when it
+    /// changes a little.
+    pub fn contenders(&self, slack: f64) -> Kinds {
+        let best = self.counts.iter().map(|c| c.1).min().unwrap_or(0);
+        let limit = best as f64 * (1.0 + slack) + FEW_CELLS;
+        self.counts
+            .iter()
+            .filter(|c| c.1 as f64 <= limit)
+            .fold(Kinds::only(self.volume.shape), |k, c| k.with(c.0))
+    }
+
     fn bytes(&self) -> usize {
         std::mem::size_of::<Fit>()
             + self.hull.len() * std::mem::size_of::<DVec3>()
@@ -189,13 +207,19 @@ impl Fitter {
     /// The best of the kinds' volumes for `points` (see the type's docs) and its number of
     /// outside cells. The kinds are judged by their counts; only the chosen one's cells are
     /// listed, by the caller that needs them.
-    fn choose(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> (BoundingVolume, usize) {
+    fn choose(
+        &self,
+        solid: &Solid,
+        points: &[DVec3],
+        kinds: Kinds,
+    ) -> (BoundingVolume, Vec<(Shape, usize)>) {
         let min_r = 0.5 * solid.grid.h;
         let shapes: Vec<Shape> = kinds.shapes().collect();
         let fits = crate::bounding::fit_each(&shapes, points, min_r, self.max_hull_vertices);
         let counts = crate::parallel::map(&fits, |v| outside_count(&solid.grid, v));
+        let each: Vec<(Shape, usize)> = shapes.iter().copied().zip(counts).collect();
         let mut best: Option<(BoundingVolume, usize)> = None;
-        for (v, cells) in fits.into_iter().zip(counts) {
+        for (v, &(_, cells)) in fits.into_iter().zip(&each) {
             let better = best
                 .as_ref()
                 .is_none_or(|(b, bc)| (cells, v.volume()) < (*bc, b.volume()));
@@ -203,17 +227,20 @@ impl Fitter {
                 best = Some((v, cells));
             }
         }
-        // `Params::validate` keeps the set non-empty; an empty one still gets a volume.
-        best.unwrap_or_else(|| {
-            let v = crate::bounding::fit(crate::Shape::Ellipsoid, points, min_r, 32);
-            let cells = outside_count(&solid.grid, &v);
-            (v, cells)
-        })
+        match best {
+            Some((v, _)) => (v, each),
+            // `Params::validate` keeps the set non-empty; an empty one still gets a volume.
+            None => {
+                let v = crate::bounding::fit(Shape::Ellipsoid, points, min_r, 32);
+                let cells = outside_count(&solid.grid, &v);
+                (v, vec![(Shape::Ellipsoid, cells)])
+            }
+        }
     }
 
     fn make(&self, solid: &Solid, points: &[DVec3], kinds: Kinds) -> Fit {
         let hull = hull_points(points);
-        let (volume, _) = self.choose(solid, &hull, kinds);
+        let (volume, counts) = self.choose(solid, &hull, kinds);
         let outside = outside_cells(&solid.grid, &volume);
         crate::work::add(points.len() + outside.len());
         self.cells
@@ -222,6 +249,7 @@ impl Fitter {
             hull,
             volume,
             outside,
+            counts,
             protrusion: OnceLock::new(),
         }
     }

@@ -23,6 +23,12 @@ use crate::{Kinds, Mesh};
 /// current volume for the move to be tried.
 const REACH: f64 = 1.15;
 
+/// How much more than the chosen kind's outside cells (as a fraction of them) another kind
+/// of a part may have and still be fitted to the part's moves (see [`kind`]). On the 21
+/// shared meshes, 0.5 left the judge's TOV and protrusion as they were with every kind
+/// (medians), 0.25 did not (see BENCHMARKS.md).
+const CONTENTION: f64 = 0.5;
+
 /// A pass that lowers TOV by less than this ends the tightening.
 const MIN_PASS_GAIN: f64 = 1e-3;
 
@@ -182,13 +188,21 @@ fn fit_moves(
     fitter.fit_candidates_as(solid, work);
 }
 
-/// The kinds a move's new fit of part `i` may have: `among`, or without it the kind of its
-/// current fit (the move is judged with the part's real kind at the cost of one fit
-/// instead of one per kind; the refit after the tightening chooses among them all again).
+/// The kinds a move's new fit of part `i` may have. Without `among`, the kind of its current
+/// fit: the move is judged with the part's real kind at the cost of one fit instead of one
+/// per kind. With it, those of `among` still in contention for the part (see
+/// [`Fit::contenders`]): a layer more or less rarely makes a kind win that was far behind.
+/// The refit after the tightening chooses among them all again.
 fn kind(current: &[Arc<Fit>], i: u32, among: Option<Kinds>) -> Kinds {
+    let fit = &current[i as usize];
     match among {
-        None => Kinds::only(current[i as usize].volume.shape),
-        Some(all) => all,
+        None => Kinds::only(fit.volume.shape),
+        Some(all) => {
+            let c = fit.contenders(CONTENTION);
+            all.shapes()
+                .filter(|&s| c.contains(s))
+                .fold(Kinds::only(fit.volume.shape), Kinds::with)
+        }
     }
 }
 
@@ -270,7 +284,17 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             if reach > REACH {
                 continue;
             }
-            cands.extend(layer_move(solid, part, pair, layer, min_part));
+            let Some(mv) = layer_move(solid, part, pair, layer, min_part) else {
+                continue;
+            };
+            // A move can take out of the union only the cells that no other volume covers:
+            // with none, it cannot gain, and is not worth a refit either.
+            let old = [pair.0, pair.1].map(|i| fits[i as usize].outside.as_slice());
+            if cov.union_if(old, [&[], &[]]) == cov.union {
+                last_gain.insert(pair, 0);
+                continue;
+            }
+            cands.push(mv);
         }
         fit_moves(mesh, solid, fitter, part, &cands, &fits, among);
         // Gains against the current state.
