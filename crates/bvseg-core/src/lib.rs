@@ -53,6 +53,7 @@ mod math;
 mod mesh;
 mod metrics;
 mod moments;
+mod multigrid;
 mod optimization;
 mod parallel;
 mod params;

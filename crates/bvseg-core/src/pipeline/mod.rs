@@ -25,8 +25,7 @@ mod state;
 pub(crate) use context::Context;
 pub(crate) use state::State;
 
-use crate::initialization::cvt;
-use crate::optimization::optimize;
+use crate::multigrid::initial_partition;
 use crate::partition::{Partition, Solid};
 use crate::refine::checkpoint::{Checkpoints, CHECKPOINT_PASSES};
 use crate::refine::patience::MovPatience;
@@ -209,8 +208,7 @@ impl Segmenter {
     fn start(&mut self) -> Step {
         let p = &self.ctx.params;
         let k = p.k.unwrap_or(self.ctx.solid.pieces.min(p.max_k));
-        let mut part = cvt(&self.ctx.solid, k.min(self.ctx.solid.len()), p.seed);
-        optimize(&self.ctx.solid, &mut part, None, None, p.max_sweeps);
+        let part = initial_partition(&self.ctx.solid, k, p.seed, p.max_sweeps);
         let s = State::evaluate(&mut self.ctx, part);
         self.phase = if self.ctx.params.k.is_some() {
             Phase::Final

@@ -207,6 +207,34 @@ impl Grid {
         grid
     }
 
+    /// The lattice of twice the cell size over the same box, each of its cells a sample when
+    /// any of the eight cells it covers is one (so every sample lies in one of its samples:
+    /// see [`Grid::coarse_cell`]). Only the optimisation of F runs on it, never the outside
+    /// volume, so its offset lattice is left empty.
+    pub fn coarser(&self) -> Grid {
+        let [nx, ny, nz] = self.dims;
+        let dims = [nx.div_ceil(2), ny.div_ceil(2), nz.div_ceil(2)];
+        let mut mask = vec![false; dims[0] * dims[1] * dims[2]];
+        for c in &self.coords {
+            let [i, j, k] = c.map(|x| x as usize / 2);
+            mask[i + dims[0] * (j + dims[1] * k)] = true;
+        }
+        let od = offset_dims(dims);
+        Self::from_masks(
+            self.origin + DVec3::splat(0.5 * self.h),
+            2.0 * self.h,
+            dims,
+            &mask,
+            vec![false; od[0] * od[1] * od[2]],
+        )
+    }
+
+    /// The cell of [`Grid::coarser`] that sample `s` lies in, as its cell coordinates.
+    #[inline]
+    pub fn coarse_cell(&self, s: usize) -> [i64; 3] {
+        self.coords[s].map(|x| i64::from(x / 2))
+    }
+
     /// The sample at lattice cell `(i, j, k)`, or [`NONE`] when that cell is outside the solid
     /// (including every cell beyond the grid's extent).
     #[inline]
