@@ -20,14 +20,16 @@ pub struct Coverage {
 }
 
 impl Coverage {
-    /// An empty coverage over the solid's lattices with a margin of half their size around
-    /// them (cells beyond fall back to a hash map).
+    /// An empty coverage over the solid's lattices with a margin of a quarter of their size
+    /// around them (cells beyond, where only volumes far larger than their parts reach, fall
+    /// back to a hash map). Its arrays take 3.4 times as many cells as the lattice; with
+    /// half the size around them it was 8 (132 MB at a million samples of the bunny).
     pub fn new(solid: &Solid) -> Self {
         let d = solid.grid.dims;
         let m = [
-            d[0] as i64 / 2 + 2,
-            d[1] as i64 / 2 + 2,
-            d[2] as i64 / 2 + 2,
+            d[0] as i64 / 4 + 2,
+            d[1] as i64 / 4 + 2,
+            d[2] as i64 / 4 + 2,
         ];
         let lo = [-m[0], -m[1], -m[2]];
         let n = [

@@ -272,7 +272,9 @@ pub fn outside_count(grid: &Grid, v: &BoundingVolume) -> usize {
 /// Cells of both lattices outside the solid whose centres `v` contains (see
 /// [`for_each_outside_cell`]).
 pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<Cell> {
-    let mut out = Vec::new();
+    // Counted first, so that the lists the fit cache keeps take no more memory than they
+    // hold (a growing vector ends up to twice that).
+    let mut out = Vec::with_capacity(outside_count(grid, v));
     for_each_outside_cell(grid, v, |c| out.push(c));
     out
 }
