@@ -5,23 +5,37 @@
 //! to its first one (far beyond any real index). The encoding stays in this file.
 
 /// Added to the first coordinate of a cell of the offset lattice.
-const OFFSET_TAG: i64 = 1 << 40;
+const OFFSET_TAG: i32 = 1 << 29;
+/// Largest magnitude of a first coordinate: beyond it, both lattices would meet.
+const FIRST_MAX: i64 = (1 << 28) - 1;
 
 /// A cell of the sampling lattice or of the offset lattice (see [`crate::metrics`]). Ordered
 /// and hashed by its encoded coordinates.
+///
+/// Twelve bytes, as the fit cache keeps lists of many of them. Lattices stay far below the
+/// coordinate range (the sampling keeps them under `64 n + 10^6` cells); a coordinate beyond
+/// it, which only an absurdly large volume could reach, is clamped to its end.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct Cell([i64; 3]);
+pub struct Cell([i32; 3]);
+
+/// `c` clamped into the encoding's range.
+#[inline]
+fn narrow([i, j, k]: [i64; 3]) -> [i32; 3] {
+    let wide = |x: i64| x.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+    [i.clamp(-FIRST_MAX, FIRST_MAX) as i32, wide(j), wide(k)]
+}
 
 impl Cell {
     /// Cell `c` of the sampling lattice.
     #[inline]
     pub fn sampling(c: [i64; 3]) -> Self {
-        Cell(c)
+        Cell(narrow(c))
     }
 
     /// Cell `c` of the offset lattice (centres at `origin + h (c + 1/2)`).
     #[inline]
-    pub fn offset([i, j, k]: [i64; 3]) -> Self {
+    pub fn offset(c: [i64; 3]) -> Self {
+        let [i, j, k] = narrow(c);
         Cell([i + OFFSET_TAG, j, k])
     }
 
@@ -34,9 +48,9 @@ impl Cell {
     /// The cell's indices in its own lattice.
     #[inline]
     pub fn index(&self) -> [i64; 3] {
-        let [i, j, k] = self.0;
+        let [i, j, k] = self.0.map(i64::from);
         if self.is_offset() {
-            [i - OFFSET_TAG, j, k]
+            [i - i64::from(OFFSET_TAG), j, k]
         } else {
             [i, j, k]
         }
@@ -49,13 +63,25 @@ mod tests {
 
     #[test]
     fn lattices_stay_apart_and_indices_round_trip() {
-        for c in [[0, 0, 0], [-5, 7, 1 << 20], [(1 << 39) - 1, -3, 2]] {
+        for c in [
+            [0, 0, 0],
+            [-5, 7, 1 << 20],
+            [(1 << 28) - 1, -3, 2],
+            [1 - (1 << 28), 4, -9],
+        ] {
             let (s, o) = (Cell::sampling(c), Cell::offset(c));
             assert!(!s.is_offset() && o.is_offset());
             assert_eq!((s.index(), o.index()), (c, c));
             assert_ne!(s, o);
         }
-        // Negative offset indices (cells beyond the lattice's low corner) stay offset.
+        // Negative offset indices (cells beyond the lattice's low corner) stay offset, and
+        // coordinates out of range are clamped, not wrapped.
         assert!(Cell::offset([-1000, 0, 0]).is_offset());
+        assert!(Cell::offset([-(1 << 40), 0, 0]).is_offset());
+        assert!(!Cell::sampling([1 << 40, 0, 0]).is_offset());
+        assert_eq!(
+            Cell::sampling([0, 1 << 40, 0]).index()[1],
+            i64::from(i32::MAX)
+        );
     }
 }
