@@ -18,7 +18,7 @@ fi
 # The CLI's volumes for the bundled mesh of the timed run, to compare byte for byte with the
 # page's download (same mesh, parameters and seed: same bytes on native and wasm).
 echo "==> the CLI's JSON for the page test"
-mesh=${BVSEG_TEST_MESH:-fourleg_2}
+mesh=${BVSEG_TEST_MESH:-spot}
 (cd .. && cargo build --release --bin bvseg)
 mkdir -p tests/cli-json
 ../target/release/bvseg segment "../assets/meshes/$mesh.obj" -q -o "tests/cli-json/$mesh.json" >/dev/null

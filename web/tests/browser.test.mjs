@@ -19,7 +19,7 @@ const dist = join(here, '..', 'dist');
 const shots = join(here, 'screenshots');
 const CHROMIUM = process.env.BVSEG_CHROMIUM || '/usr/bin/chromium';
 // The mesh of the timed run: a bundled mesh, segmented with the defaults (20,000 samples).
-const MESH = process.env.BVSEG_TEST_MESH || 'fourleg_2';
+const MESH = process.env.BVSEG_TEST_MESH || 'spot';
 const TIMEOUT_MS = 180_000;
 
 const TYPES = {
@@ -194,7 +194,7 @@ test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async 
   console.log(
     `# ${MESH}: k=${r.k} TOV=${r.tov.toFixed(4)} protrusion=${r.protrusion_rel.toFixed(4)} of the diagonal ` +
       `MOV=${r.mov.toFixed(4)} F=${r.f.toFixed(4)} samples=${r.samples}; tolerances (TOV 0.3, protrusion 0.05) met: ${r.met}; run ${r.time_s.toFixed(2)} s ` +
-      `in the page (budget 3 s; ${r.core_s.toFixed(2)} s of it in the core, the rest drawing ${r.frames} frames), ` +
+      `in the page (bar 2 s; ${r.core_s.toFixed(2)} s of it in the core, the rest drawing ${r.frames} frames), ` +
       `${seconds.toFixed(2)} s from navigation`,
   );
 
