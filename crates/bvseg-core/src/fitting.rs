@@ -205,9 +205,9 @@ impl Fitter {
         self.kinds
     }
 
-    /// The best of the kinds' volumes for `points` (see the type's docs) and its number of
-    /// outside cells. The kinds are judged by their counts; only the chosen one's cells are
-    /// listed, by the caller that needs them.
+    /// The best of the kinds' volumes for `points` (see the type's docs) and each kind's
+    /// number of outside cells. The kinds are judged by their counts; only the chosen one's
+    /// cells are listed, by the caller that needs them.
     fn choose(
         &self,
         solid: &Solid,

@@ -231,8 +231,9 @@ fn apply(part: &mut Partition, mv: &Move) {
 /// How long a tightening runs: up to `total` passes, of which at most `full` judge every move
 /// (the others only the moves that gained before: see the comment on `last_gain`); and
 /// whether a move's parts keep their kinds (`keep_kinds`, one fit per part: the quick
-/// tightenings of the refinement's checkpoints) or choose among all the run's kinds (the
-/// final one: on the shared human_2, keeping them left TOV at 0.342 instead of 0.326).
+/// tightenings of the refinement's checkpoints) or choose among the run's kinds still in
+/// contention for them (the final one: on the shared human_2, keeping the kinds left TOV at
+/// 0.342 instead of 0.326; see [`kind`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Passes {
     pub total: usize,
