@@ -3,7 +3,11 @@
 import init, { start, widgetRect } from './bvseg_viewer.js';
 
 function fail(err) {
-  const msg = String(err && err.message ? err.message : err).split('\n')[0];
+  let msg = String(err && err.message ? err.message : err).split('\n')[0];
+  if (err instanceof WebAssembly.CompileError) {
+    // The module is built with WebAssembly SIMD (web/build.sh).
+    msg += ' (this page needs WebAssembly SIMD: Chrome 91, Firefox 89, Safari 16.4 or later)';
+  }
   document.title = `bvseg: error: ${msg}`;
   document.getElementById('bvseg-result').textContent = msg;
   document.getElementById('loading').textContent = `bvseg failed to start: ${msg}`;

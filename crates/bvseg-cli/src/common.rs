@@ -89,7 +89,7 @@ pub struct ParamArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SAMPLES)]
     pub max_samples: usize,
 
-    /// Seed of the initialisation; equal seeds give identical results.
+    /// Seed of the initialisation with --k (the tolerance mode does not use it); equal seeds give identical results.
     #[arg(long, value_name = "S", default_value_t = Params::default().seed)]
     pub seed: u64,
 

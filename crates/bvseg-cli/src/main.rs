@@ -1,4 +1,4 @@
-//! `bvseg`: wrap a mesh in a few tight ellipsoids or oriented boxes.
+//! `bvseg`: wrap a mesh in a few tight ellipsoids, boxes, spheres, capsules, cylinders or convex hulls.
 //!
 //! Exit codes: 0 on success; 2 on any error (bad input, bad usage, or a file that cannot be
 //! written), with one line on stderr, `bvseg: error: <message>`; 3 with `--strict` when the
@@ -20,7 +20,7 @@ mod verify;
 #[command(
     name = "bvseg",
     version,
-    about = "Wrap a 3D mesh in a few tight ellipsoids or oriented boxes"
+    about = "Wrap a 3D mesh in a few tight ellipsoids, boxes, spheres, capsules, cylinders or convex hulls"
 )]
 struct Cli {
     #[command(subcommand)]

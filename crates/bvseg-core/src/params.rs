@@ -22,7 +22,9 @@ pub struct Params {
     /// per cent of it).
     pub samples: usize,
     /// Seed of the initialisation: equal seeds give bit-identical results, on any thread
-    /// count and platform. Default 0; any value.
+    /// count and platform. It matters only with a fixed [`Params::k`]: the tolerance mode
+    /// starts from one part per piece of the solid, which needs no random choice, and splits
+    /// deterministically. Default 0; any value.
     pub seed: u64,
     /// The kinds of bounding volume a part may get: each part gets, of these, the volume
     /// that adds the least outside volume. Default [`Kinds::PRIMITIVES`] (ellipsoid, box,

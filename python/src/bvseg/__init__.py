@@ -311,7 +311,7 @@ Keyword arguments (the command line's options; the defaults are the core's):
   ``target``: an engine's native set, one of {", ".join(TARGETS)} (``-hull`` adds hulls).
 - ``max_hull_vertices`` ({DEFAULTS['max_hull_vertices']}): most vertices of a hull.
 - ``samples`` ({DEFAULTS['samples']}): target number of interior samples.
-- ``seed`` ({DEFAULTS['seed']}): seed of the initialisation; equal seeds, equal results.
+- ``seed`` ({DEFAULTS['seed']}): seed of the initialisation with ``k`` (the tolerance mode does not use it); equal seeds, equal results.
 - ``threads`` (all cores): worker threads (a pool of its own); the result does not depend on it.
 - ``merge`` ({DEFAULTS['merge']}), ``polish`` ({DEFAULTS['polish']}): ``False`` is
   ``--no-merge``, ``--no-polish``.
