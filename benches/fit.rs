@@ -6,7 +6,8 @@
 //! each part's enclosure points (boundary samples, shared cell-face centres and mesh vertices).
 //! Each benchmark fits every part once per iteration; the throughput line gives fits per
 //! second, and the per-fit time is the iteration time divided by the part count printed
-//! before it. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
+//! before it. `min_capsule`, `min_cylinder` and `min_capsule_and_cylinder` time those kinds'
+//! searches on the parts' hulls. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
 //! count): `hull_points`, then `Fitter::fit_points` on the hull.
 // Tests and benchmarks state their expectations by panicking.
 // criterion_group! defines undocumented public functions.
@@ -18,6 +19,7 @@ use bvseg::internals::mvee_of_hull;
 use bvseg::internals::Enclosure;
 use bvseg::internals::Grid;
 use bvseg::internals::Solid;
+use bvseg::internals::{min_axial, min_capsule_and_cylinder, Axial};
 use bvseg::internals::{Fitter, MVEE_TOL};
 use bvseg::{Kinds, Mesh};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
@@ -104,6 +106,24 @@ fn bench(c: &mut Criterion) {
                 for p in &cs.parts {
                     let h = hull_points(black_box(p));
                     black_box(fitter.fit_points(&cs.solid, &h));
+                }
+            })
+        });
+        // The capsule and cylinder searches, on the parts' hulls (each alone, and the two
+        // sharing their circles as a fit of every primitive does).
+        for (name, kind) in [("capsule", Axial::Capsule), ("cylinder", Axial::Cylinder)] {
+            g.bench_function(format!("min_{name}"), |b| {
+                b.iter(|| {
+                    for h in &hulls {
+                        black_box(min_axial(black_box(h), kind, min_r));
+                    }
+                })
+            });
+        }
+        g.bench_function("min_capsule_and_cylinder", |b| {
+            b.iter(|| {
+                for h in &hulls {
+                    black_box(min_capsule_and_cylinder(black_box(h), min_r));
                 }
             })
         });

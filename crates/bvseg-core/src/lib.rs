@@ -82,6 +82,7 @@ pub use volume::{BoundingVolume, Polytope, Shape};
 #[doc(hidden)]
 pub mod internals {
     pub use crate::assignment::{assign, PartMetric, Rule};
+    pub use crate::bounding::axial::{min_axial, min_capsule_and_cylinder, Axial};
     pub use crate::bounding::hull::{convex_hull, hull_points};
     pub use crate::bounding::mvee::{mvee, mvee_of_hull};
     pub use crate::bounding::obb::min_obb;

@@ -10,13 +10,14 @@
 //! the 13 axes of a 26-DOP; the best few are refined by a pattern search on the sphere of
 //! directions with shrinking steps. The search judges a capsule by the one of radius `R`
 //! (one pass over the points instead of a radius search); the best directions then get
-//! their best radius.
+//! their best radius. The pattern search skips a direction without its circle when a lower
+//! bound (see [`Circles::quick_bound`]) shows that it cannot beat the current one.
 use std::cell::RefCell;
 use std::collections::HashMap;
 
 use glam::{DMat3, DVec2, DVec3};
 
-use super::ball::{finite_shuffled, min_circle_in_order};
+use super::ball::{circle3_radius_below, finite_shuffled, min_circle_in_order};
 use crate::linalg::sym_eigen;
 use crate::volume::BoundingVolume;
 #[cfg(test)]
@@ -30,6 +31,9 @@ const FIRST_STEP: f64 = 0.25;
 const HALVINGS: usize = 6;
 /// Radii tried, from the circle's to the enclosing ball's, before the golden-section search.
 const RADII: usize = 12;
+/// Relative margin of [`Circles::quick_bound`] over its round-off (a few units of 1e-16), so
+/// that skipping a direction by it never changes the search.
+const BOUND_SLACK: f64 = 1e-9;
 
 /// Which of the two axial shapes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,11 +59,23 @@ pub fn min_capsule_and_cylinder(points: &[DVec3], min_r: f64) -> [BoundingVolume
     [Axial::Capsule, Axial::Cylinder].map(|kind| search(&circles, kind, min_r))
 }
 
-/// The points (shuffled once for all the projections' circles) and the minimum circle of
-/// their projection across each direction tried so far, by the direction's bits.
+/// The points (shuffled once for all the projections' circles) and what is known across each
+/// direction tried so far, by the direction's bits.
 struct Circles<'a> {
     p: &'a [DVec3],
-    known: RefCell<HashMap<[u64; 3], (DVec2, f64)>>,
+    known: RefCell<HashMap<[u64; 3], Across>>,
+}
+
+/// The points seen along and across a direction.
+#[derive(Clone, Copy)]
+struct Across {
+    /// The minimum circle of the points projected across it: centre and radius.
+    centre: DVec2,
+    radius: f64,
+    /// The points that circle rests on (indices, repeated when fewer than three).
+    support: [usize; 3],
+    /// The points lowest and highest along it.
+    ends: [usize; 2],
 }
 
 impl<'a> Circles<'a> {
@@ -71,16 +87,63 @@ impl<'a> Circles<'a> {
     }
 
     /// The minimum circle (centre, radius) of the points projected on `(u, w)`, the basis
-    /// [`across`] gives for `a`.
-    fn of(&self, a: DVec3, flat: &[DVec2]) -> (DVec2, f64) {
+    /// [`fit_with`] takes for `a`; `ends` are the points lowest and highest along `a`.
+    fn of(&self, a: DVec3, flat: &[DVec2], ends: [usize; 2]) -> (DVec2, f64) {
         let key = a.to_array().map(f64::to_bits);
-        if let Some(&c) = self.known.borrow().get(&key) {
-            return c;
+        if let Some(c) = self.known.borrow().get(&key) {
+            return (c.centre, c.radius);
         }
 
-        let c = min_circle_in_order(flat);
-        self.known.borrow_mut().insert(key, c);
-        c
+        let (centre, radius, support) = min_circle_in_order(flat);
+        let across = Across {
+            centre,
+            radius,
+            support,
+            ends,
+        };
+        self.known.borrow_mut().insert(key, across);
+        (centre, radius)
+    }
+
+    /// What is known across `a`, if its circle was computed.
+    fn get(&self, a: DVec3) -> Option<Across> {
+        let key = a.to_array().map(f64::to_bits);
+        self.known.borrow().get(&key).copied()
+    }
+
+    /// Whether the quick volume along `cand`, whose circle is not known yet, is shown not to
+    /// be below `limit` by [`Circles::quick_bound`] from `near`.
+    fn cannot_beat(&self, cand: DVec3, near: DVec3, kind: Axial, min_r: f64, limit: f64) -> bool {
+        self.get(cand).is_none()
+            && self
+                .quick_bound(cand, near, kind, min_r)
+                .is_some_and(|b| b * (1.0 - BOUND_SLACK) >= limit)
+    }
+
+    /// A lower bound on the volume of `fit_with(self, a, kind, min_r, false)`, from the few
+    /// points that made the circle and the extent across and along `near`, a direction close
+    /// to `a` whose circle is known: across `a`, the circle of those points is no larger than
+    /// all the points' circle, and the spread of the two ends no larger than the extent; both
+    /// volumes grow with either. A handful of dot products instead of passes over the points.
+    fn quick_bound(&self, a: DVec3, near: DVec3, kind: Axial, min_r: f64) -> Option<f64> {
+        let known = self.get(near)?;
+        let u = a.any_orthonormal_vector();
+        let w = a.cross(u);
+        let flat = known.support.map(|i| {
+            let q = self.p[i];
+            DVec2::new(q.dot(u), q.dot(w))
+        });
+        let r = circle3_radius_below(flat).max(min_r);
+        // The same products as `fit_with`'s, so never more than its extent.
+        let height = self.p[known.ends[1]].dot(a) - self.p[known.ends[0]].dot(a);
+        let pi = std::f64::consts::PI;
+        Some(match kind {
+            Axial::Cylinder => 2.0 * pi * r * r * (0.5 * height).max(min_r),
+            // The capsule's segment and caps span the extent: the segment is at least
+            // `height - 2 r`, and the bound grows with r (its derivative is
+            // `2 pi r (height - r)` below `r = height / 2`, then the ball's).
+            Axial::Capsule => pi * r * r * ((height - 2.0 * r).max(0.0) + 4.0 / 3.0 * r),
+        })
     }
 }
 
@@ -99,8 +162,12 @@ fn search(circles: &Circles, kind: Axial, min_r: f64) -> BoundingVolume {
     let mut scored: Vec<(f64, DVec3)> = seeds.into_iter().map(|a| (quick(a), a)).collect();
     scored.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut best: Option<BoundingVolume> = None;
+    // A direction whose circle is not known yet is skipped when a bound shows it cannot
+    // beat the incumbent: the search takes the same steps, with fewer circles.
+    let cannot_beat =
+        |cand: DVec3, near: DVec3, limit: f64| circles.cannot_beat(cand, near, kind, min_r, limit);
     for &(v0, a0) in scored.iter().take(REFINED) {
-        let (_, a) = refine(a0, v0, quick);
+        let (_, a) = refine(a0, v0, quick, cannot_beat);
         let v = fit_with(circles, a, kind, min_r, true);
         if best.as_ref().is_none_or(|b| v.volume() < b.volume()) {
             best = Some(v);
@@ -110,8 +177,15 @@ fn search(circles: &Circles, kind: Axial, min_r: f64) -> BoundingVolume {
         .scaled_to_contain(p.iter().copied())
 }
 
-/// Pattern search over directions from `a` (volume `v`) for the least `volume`.
-fn refine(mut a: DVec3, mut v: f64, volume: impl Fn(DVec3) -> f64) -> (f64, DVec3) {
+/// Pattern search over directions from `a` (volume `v`) for the least `volume`;
+/// `cannot_beat(cand, a, limit)` may tell, without the volume, that `cand`'s is not below
+/// `limit`.
+fn refine(
+    mut a: DVec3,
+    mut v: f64,
+    volume: impl Fn(DVec3) -> f64,
+    cannot_beat: impl Fn(DVec3, DVec3, f64) -> bool,
+) -> (f64, DVec3) {
     let mut step = FIRST_STEP;
     for _ in 0..HALVINGS {
         let mut moved = true;
@@ -124,8 +198,12 @@ fn refine(mut a: DVec3, mut v: f64, volume: impl Fn(DVec3) -> f64) -> (f64, DVec
             let (s, c) = crate::math::sin_cos(step);
             for d in [e1, -e1, e2, -e2] {
                 let cand = (a * c + d * s).normalize();
+                let limit = v * (1.0 - 1e-12);
+                if cannot_beat(cand, a, limit) {
+                    continue;
+                }
                 let vc = volume(cand);
-                if vc < v * (1.0 - 1e-12) {
+                if vc < limit {
                     (a, v, moved) = (cand, vc, true);
                     break;
                 }
@@ -207,14 +285,19 @@ fn fit_with(
     let u = a.any_orthonormal_vector();
     let w = a.cross(u);
     let flat: Vec<DVec2> = p.iter().map(|&q| DVec2::new(q.dot(u), q.dot(w))).collect();
-    let (c2, circle) = circles.of(a, &flat);
-    let big_r = circle.max(min_r);
     let z: Vec<f64> = p.iter().map(|&q| q.dot(a)).collect();
-    let (zlo, zhi) = z
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
-            (l.min(x), h.max(x))
-        });
+    let (mut zlo, mut zhi, mut ends) = (f64::INFINITY, f64::NEG_INFINITY, [0; 2]);
+    for (i, &x) in z.iter().enumerate() {
+        if x < zlo {
+            ends[0] = i;
+        }
+        if x > zhi {
+            ends[1] = i;
+        }
+        (zlo, zhi) = (zlo.min(x), zhi.max(x));
+    }
+    let (c2, circle) = circles.of(a, &flat, ends);
+    let big_r = circle.max(min_r);
     let line = u * c2.x + w * c2.y;
     match kind {
         Axial::Cylinder => {
@@ -318,6 +401,72 @@ mod tests {
                 rot * DVec3::new(rad * ang.cos(), rad * ang.sin() * 0.8, z)
             })
             .collect()
+    }
+
+    /// Unit directions near `a`, as the pattern search tries them.
+    fn around(a: DVec3, r: &mut Rng) -> Vec<DVec3> {
+        (0..40)
+            .filter_map(|i| {
+                let step = 0.25 * 0.5f64.powi(i % 7);
+                let d = DVec3::new(r.next_f64() - 0.5, r.next_f64() - 0.5, r.next_f64() - 0.5);
+                (a + step * d.reject_from(a).normalize_or_zero()).try_normalize()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_quick_bound_is_below_the_quick_volume() {
+        let mut r = Rng::new(11);
+        let mut tight = 0;
+        let mut tried = 0;
+        for seed in 0..6 {
+            let p = finite_shuffled(&limb(seed));
+            let circles = Circles::new(&p);
+            for near in seeds(&p) {
+                for kind in [Axial::Capsule, Axial::Cylinder] {
+                    let _ = fit_with(&circles, near, kind, 1e-6, false);
+                    for cand in around(near, &mut r) {
+                        let bound = circles
+                            .quick_bound(cand, near, kind, 1e-6)
+                            .expect("the circle across `near` is known");
+                        let v = fit_with(&Circles::new(&p), cand, kind, 1e-6, false).volume();
+                        assert!(bound * (1.0 - BOUND_SLACK) <= v, "{kind:?}: {bound} > {v}");
+                        tried += 1;
+                        tight += usize::from(bound > 0.9 * v);
+                    }
+                }
+            }
+        }
+        // A bound far below the volume would be useless: near half are within 10 % (the
+        // directions here reach 0.25 rad away, where other points make the circle and ends).
+        assert!(tight * 3 > tried, "{tight} of {tried} within 10 %");
+    }
+
+    #[test]
+    fn skipping_by_the_bound_leaves_the_search_as_it_was() {
+        for seed in 0..6 {
+            let p = finite_shuffled(&limb(seed));
+            for kind in [Axial::Capsule, Axial::Cylinder] {
+                let (skipping, plain) = (Circles::new(&p), Circles::new(&p));
+                let quick = |c: &Circles, a: DVec3| fit_with(c, a, kind, 1e-6, false).volume();
+                for a0 in seeds(&p) {
+                    let v0 = quick(&plain, a0);
+                    let _ = quick(&skipping, a0);
+                    let cannot_beat = |cand: DVec3, near: DVec3, limit: f64| {
+                        skipping.cannot_beat(cand, near, kind, 1e-6, limit)
+                    };
+                    let with = refine(a0, v0, |a| quick(&skipping, a), cannot_beat);
+                    let without = refine(a0, v0, |a| quick(&plain, a), |_, _, _| false);
+                    assert_eq!(
+                        with.0.to_bits(),
+                        without.0.to_bits(),
+                        "{kind:?} seed {seed}"
+                    );
+                    assert_eq!(with.1, without.1);
+                }
+                assert!(skipping.known.borrow().len() < plain.known.borrow().len());
+            }
+        }
     }
 
     #[test]

@@ -121,33 +121,40 @@ fn ball4(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> (DVec3, f64) {
 /// none).
 #[cfg(test)]
 pub fn min_circle(points: &[DVec2]) -> (DVec2, f64) {
-    min_circle_in_order(&shuffled(points))
+    let (c, r, _) = min_circle_in_order(&shuffled(points));
+    (c, r)
 }
 
 /// [`min_circle`] of points already in an order unrelated to their geometry (see
-/// [`shuffled`]), for callers that fit many projections of one point set.
-pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64) {
+/// [`shuffled`]), for callers that fit many projections of one point set. Also returns the
+/// indices of the (up to three, repeated when fewer) points the circle was built on: their
+/// own minimum circle is the same, up to round-off.
+pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64, [usize; 3]) {
     let Some(&first) = p.first() else {
-        return (DVec2::ZERO, 0.0);
+        return (DVec2::ZERO, 0.0, [0; 3]);
     };
     let inside = |(c, r2): (DVec2, f64), q: DVec2| (q - c).length_squared() <= r2 * (1.0 + SLACK);
     let mut b = (first, 0.0);
+    let mut support = [0; 3];
     for i in 1..p.len() {
         if inside(b, p[i]) {
             continue;
         }
         b = (p[i], 0.0);
+        support = [i; 3];
         for j in 0..i {
             if inside(b, p[j]) {
                 continue;
             }
             let c = 0.5 * (p[i] + p[j]);
             b = (c, (p[i] - c).length_squared());
+            support = [i, j, j];
             for k in 0..j {
                 if inside(b, p[k]) {
                     continue;
                 }
                 b = circle3(p[i], p[j], p[k]);
+                support = [i, j, k];
             }
         }
     }
@@ -156,7 +163,42 @@ pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64) {
         .iter()
         .map(|&q| (q - b.0).length_squared())
         .fold(b.1, f64::max);
-    (b.0, r2.sqrt())
+    (b.0, r2.sqrt(), support)
+}
+
+/// A lower bound on the radius of the smallest circle holding the three points, within a few
+/// units of round-off of it: half the longest side, or the circumradius when the triangle is
+/// clearly acute (computed at the largest angle, where it is well conditioned).
+pub fn circle3_radius_below(t: [DVec2; 3]) -> f64 {
+    let [a, b, c] = t;
+    // The longest side's squared length, then the two sides at the vertex opposite it.
+    let (l, s1, s2, at) = {
+        let (ab, bc, ca) = (
+            (b - a).length_squared(),
+            (c - b).length_squared(),
+            (a - c).length_squared(),
+        );
+        if ab >= bc && ab >= ca {
+            (ab, bc, ca, (c, a, b))
+        } else if bc >= ca {
+            (bc, ca, ab, (a, b, c))
+        } else {
+            (ca, ab, bc, (b, c, a))
+        }
+    };
+    let half_diameter = 0.5 * l.sqrt();
+    if l >= (s1 + s2) * (1.0 - 1e-6) {
+        return half_diameter;
+    }
+    // R = l^(1/2) / (2 sin C), with sin C = |u x v| / (|u| |v|) at the vertex C opposite it.
+    let (u, v) = (at.1 - at.0, at.2 - at.0);
+    let cross = u.perp_dot(v).abs();
+    let r = l.sqrt() * (s1 * s2).sqrt() / (2.0 * cross);
+    if r.is_finite() {
+        r.max(half_diameter)
+    } else {
+        half_diameter
+    }
 }
 
 /// The circumcircle of three points (the widest pair's circle when they are collinear).
@@ -191,6 +233,28 @@ mod tests {
         (0..n)
             .map(|_| DVec3::new(r.next_f64() - 0.5, r.next_f64() - 0.5, r.next_f64() - 0.5) * scale)
             .collect()
+    }
+
+    #[test]
+    fn the_three_points_bound_is_their_circle_from_below() {
+        let mut r = Rng::new(5);
+        for i in 0..2000 {
+            let mut t = [0; 3].map(|_| DVec2::new(r.next_f64(), r.next_f64()));
+            // Thin and repeated triangles too.
+            match i % 4 {
+                1 => t[2] = t[0] + 1e-9 * (t[1] - t[0]).perp(),
+                2 => t[2] = t[1],
+                3 => t[2] = t[0].lerp(t[1], r.next_f64()) + DVec2::splat(1e-13),
+                _ => {}
+            }
+            let exact = min_circle(&t).1;
+            let below = circle3_radius_below(t);
+            assert!(below <= exact * (1.0 + 1e-12), "{t:?}: {below} > {exact}");
+            assert!(
+                below >= exact * (1.0 - 1e-6) || i % 4 != 0,
+                "{t:?}: {below} < {exact}"
+            );
+        }
     }
 
     #[test]
