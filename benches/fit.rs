@@ -6,9 +6,9 @@
 //! each part's enclosure points (boundary samples, shared cell-face centres and mesh vertices).
 //! Each benchmark fits every part once per iteration; the throughput line gives fits per
 //! second, and the per-fit time is the iteration time divided by the part count printed
-//! before it. `min_capsule`, `min_cylinder` and `min_capsule_and_cylinder` time those kinds'
-//! searches on the parts' hulls. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
-//! count): `hull_points`, then `Fitter::fit_points` on the hull.
+//! before it. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
+//! count): `hull_points`, then `Fitter::fit_points` on the hull. `min_capsule`, `min_cylinder`
+//! and `min_capsule_and_cylinder` time those kinds' searches on the parts' hulls.
 // Tests and benchmarks state their expectations by panicking.
 // criterion_group! defines undocumented public functions.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
