@@ -22,7 +22,10 @@ use bvseg::internals::Solid;
 use bvseg::internals::{min_axial, min_capsule_and_cylinder, Axial};
 use bvseg::internals::{Fitter, MVEE_TOL};
 use bvseg::{Kinds, Mesh};
-use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use criterion::measurement::WallTime;
+use criterion::{
+    black_box, criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput,
+};
 use glam::DVec3;
 
 /// A mesh, its solid, and the enclosure points of each part of an optimised 16-part CVT.
@@ -67,6 +70,22 @@ fn cases() -> Vec<Case> {
     .collect()
 }
 
+/// Benchmark `fit` applied to every hull, once per iteration.
+fn each_hull<T>(
+    g: &mut BenchmarkGroup<WallTime>,
+    name: &str,
+    hulls: &[Vec<DVec3>],
+    fit: impl Fn(&[DVec3]) -> T,
+) {
+    g.bench_function(name, |b| {
+        b.iter(|| {
+            for h in hulls {
+                black_box(fit(black_box(h)));
+            }
+        })
+    });
+}
+
 fn bench(c: &mut Criterion) {
     for cs in cases() {
         let min_r = 0.5 * cs.solid.grid.h;
@@ -93,12 +112,8 @@ fn bench(c: &mut Criterion) {
             })
         });
         for tol in [1e-4, 1e-3] {
-            g.bench_function(format!("mvee_of_hull_tol{tol:e}"), |b| {
-                b.iter(|| {
-                    for h in &hulls {
-                        black_box(mvee_of_hull(black_box(h), tol, min_r));
-                    }
-                })
+            each_hull(&mut g, &format!("mvee_of_hull_tol{tol:e}"), &hulls, |h| {
+                mvee_of_hull(h, tol, min_r)
             });
         }
         g.bench_function("make_hull_then_fit", |b| {
@@ -112,20 +127,12 @@ fn bench(c: &mut Criterion) {
         // The capsule and cylinder searches, on the parts' hulls (each alone, and the two
         // sharing their circles as a fit of every primitive does).
         for (name, kind) in [("capsule", Axial::Capsule), ("cylinder", Axial::Cylinder)] {
-            g.bench_function(format!("min_{name}"), |b| {
-                b.iter(|| {
-                    for h in &hulls {
-                        black_box(min_axial(black_box(h), kind, min_r));
-                    }
-                })
+            each_hull(&mut g, &format!("min_{name}"), &hulls, |h| {
+                min_axial(h, kind, min_r)
             });
         }
-        g.bench_function("min_capsule_and_cylinder", |b| {
-            b.iter(|| {
-                for h in &hulls {
-                    black_box(min_capsule_and_cylinder(black_box(h), min_r));
-                }
-            })
+        each_hull(&mut g, "min_capsule_and_cylinder", &hulls, |h| {
+            min_capsule_and_cylinder(h, min_r)
         });
         g.finish();
 
