@@ -41,14 +41,19 @@ struct Move {
     m_to: Moments,
 }
 
-/// Whether the samples of `label` other than those in `layer` (sorted) form one connected
-/// piece per component of the solid.
-fn stays_connected(solid: &Solid, part: &Partition, label: u32, layer: &[u32]) -> bool {
+/// Whether the samples of part `label` (its `members`) other than those in `layer` (sorted)
+/// form one connected piece per component of the solid.
+fn stays_connected(
+    solid: &Solid,
+    part: &Partition,
+    (label, members): (u32, &[u32]),
+    layer: &[u32],
+) -> bool {
     let g = &solid.grid;
     let inside = |s: u32| part.labels[s as usize] == label && layer.binary_search(&s).is_err();
     let mut seen = vec![false; solid.len()];
     let mut per_comp: BTreeMap<u32, bool> = BTreeMap::new();
-    for s in 0..solid.len() as u32 {
+    for &s in members {
         if !inside(s) || seen[s as usize] {
             continue;
         }
@@ -137,7 +142,7 @@ fn fit_moves(
     mesh: &Mesh,
     solid: &Solid,
     fitter: &mut Fitter,
-    part: &Partition,
+    (part, members): (&Partition, &[Vec<u32>]),
     moves: &[Move],
     current: &[Arc<Fit>],
     among: Option<Kinds>,
@@ -158,7 +163,6 @@ fn fit_moves(
             from.into_iter().chain(to)
         })
         .collect();
-    let members = part.members();
     let enclosure = fitter.enclosure();
     let work = crate::parallel::map(&todo, |&(i, receiving)| {
         let mv = &moves[i];
@@ -297,7 +301,10 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             }
             cands.push(mv);
         }
-        fit_moves(mesh, solid, fitter, part, &cands, &fits, among);
+        // As the pass starts; a part changes at most once in a pass, as the pass's last use
+        // of it.
+        let members = part.members();
+        fit_moves(mesh, solid, fitter, (part, &members), &cands, &fits, among);
         // Gains against the current state.
         let ov = |f: &Fit, n: f64| relative(f.outside.len(), n);
         let mut scored: Vec<(i64, usize)> = Vec::new();
@@ -339,7 +346,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
                 [fa.outside.as_slice(), fb.outside.as_slice()],
             );
             if cov.union_if(old, new) >= cov.union
-                || !stays_connected(solid, part, mv.from, &mv.layer)
+                || !stays_connected(solid, part, (mv.from, &members[a]), &mv.layer)
             {
                 continue;
             }
@@ -414,7 +421,8 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
             .into_iter()
             .filter_map(|(pair, layer)| layer_move(solid, part, pair, layer, min_part))
             .collect();
-        fit_moves(mesh, solid, fitter, part, &cands, &fits, among);
+        let members = part.members();
+        fit_moves(mesh, solid, fitter, (part, &members), &cands, &fits, among);
         let mut best: Option<(f64, usize)> = None;
         for (i, mv) in cands.iter().enumerate() {
             let (a, b) = (mv.from as usize, mv.to as usize);
@@ -438,7 +446,12 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
             break;
         };
         let mv = &cands[i];
-        if !stays_connected(solid, part, mv.from, &mv.layer) {
+        if !stays_connected(
+            solid,
+            part,
+            (mv.from, &members[mv.from as usize]),
+            &mv.layer,
+        ) {
             break;
         }
         apply(part, mv);

@@ -30,7 +30,8 @@ pub use surface::SurfaceDistance;
 
 use glam::DVec3;
 
-use crate::sampling::{offset_dims, Grid, NONE};
+use crate::math::{ceil_i64, floor_i64};
+use crate::sampling::Grid;
 use crate::volume::{BoundingVolume, Shape};
 
 /// Outside-volume figures of a set of volumes.
@@ -44,46 +45,81 @@ pub struct Outside {
     pub mov: f64,
 }
 
-/// The range of `k` with `a + k b` (local coordinates) inside the unit shape of `v`, or
-/// `None`.
+/// The ranges of `k` with `a + k b` (local coordinates) inside the unit shape of a volume,
+/// for one direction `b` and many `a` (the columns of a lattice): what depends on `b` alone
+/// is computed once.
+struct Along<'a> {
+    v: &'a BoundingVolume,
+    b: DVec3,
+    /// `sum_j w_j b_j^2` of the shape's quadratic: the ellipsoid's or the cylinder's (also
+    /// the capsule's middle).
+    bb: f64,
+    /// A capsule's ends: their weights and `sum_j w_j b_j^2`.
+    ends: (DVec3, f64),
+}
+
+/// `sum_j w_j b_j^2`.
 #[inline]
-fn interval(v: &BoundingVolume, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
-    match v.shape {
-        Shape::Ellipsoid | Shape::Sphere => quadratic(a, b, DVec3::ONE),
-        Shape::Obb => slabs(a, b, [true; 3]),
-        Shape::Cylinder => {
-            let (l0, h0) = quadratic(a, b, DVec3::new(1.0, 1.0, 0.0))?;
-            let (l1, h1) = slabs(a, b, [false, false, true])?;
-            let (lo, hi) = (l0.max(l1), h0.min(h1));
-            (lo <= hi).then_some((lo, hi))
-        }
-        Shape::Capsule => {
-            // The middle cylinder and the two end balls (radius 1 across, 1 / l along in
-            // the local scale); the capsule is convex, so their union is one interval.
+fn weighted_square(b: DVec3, w: DVec3) -> f64 {
+    (b * b * w).element_sum()
+}
+
+const ACROSS: DVec3 = DVec3::new(1.0, 1.0, 0.0);
+
+impl<'a> Along<'a> {
+    fn new(v: &'a BoundingVolume, b: DVec3) -> Self {
+        let bb = match v.shape {
+            Shape::Ellipsoid | Shape::Sphere => weighted_square(b, DVec3::ONE),
+            Shape::Cylinder | Shape::Capsule => weighted_square(b, ACROSS),
+            Shape::Obb | Shape::Hull => 0.0,
+        };
+        let ends = if v.shape == Shape::Capsule {
+            // End balls of radius 1 across and 1 / l along, in the local scale.
             let l = v.radii.z / v.radii.x;
             let w = DVec3::new(1.0, 1.0, l * l);
-            let mid = interval(
-                &BoundingVolume {
-                    shape: Shape::Cylinder,
-                    ..v.clone()
-                },
-                a,
-                b,
-            );
-            let ends = [1.0, -1.0].map(|s| quadratic(a - DVec3::new(0.0, 0.0, s), b, w));
-            mid.into_iter()
-                .chain(ends.into_iter().flatten())
-                .reduce(|x, y| (x.0.min(y.0), x.1.max(y.1)))
+            (w, weighted_square(b, w))
+        } else {
+            (DVec3::ZERO, 0.0)
+        };
+        Self { v, b, bb, ends }
+    }
+
+    /// The range of `k` with `a + k b` inside the shape, or `None`.
+    #[inline]
+    fn interval(&self, a: DVec3) -> Option<(f64, f64)> {
+        let b = self.b;
+        match self.v.shape {
+            Shape::Ellipsoid | Shape::Sphere => quadratic(a, b, DVec3::ONE, self.bb),
+            Shape::Obb => slabs(a, b, [true; 3]),
+            Shape::Cylinder => self.cylinder(a),
+            Shape::Capsule => {
+                // The middle cylinder and the two end balls; the capsule is convex, so their
+                // union is one interval.
+                let (w, bb) = self.ends;
+                let ends = [1.0, -1.0].map(|s| quadratic(a - DVec3::new(0.0, 0.0, s), b, w, bb));
+                self.cylinder(a)
+                    .into_iter()
+                    .chain(ends.into_iter().flatten())
+                    .reduce(|x, y| (x.0.min(y.0), x.1.max(y.1)))
+            }
+            Shape::Hull => self.v.polytope().and_then(|p| p.interval(a, b)),
         }
-        Shape::Hull => v.polytope().and_then(|p| p.interval(a, b)),
+    }
+
+    #[inline]
+    fn cylinder(&self, a: DVec3) -> Option<(f64, f64)> {
+        let (l0, h0) = quadratic(a, self.b, ACROSS, self.bb)?;
+        let (l1, h1) = slabs(a, self.b, [false, false, true])?;
+        let (lo, hi) = (l0.max(l1), h0.min(h1));
+        (lo <= hi).then_some((lo, hi))
     }
 }
 
 /// The range of `k` with `sum_j w_j (a_j + k b_j)^2 <= 1`, or `None` (also when the line runs
-/// along a direction the weights ignore and the rest is inside: the caller bounds it).
+/// along a direction the weights ignore and the rest is inside: the caller bounds it); `bb`
+/// is [`weighted_square`]`(b, w)`.
 #[inline]
-fn quadratic(a: DVec3, b: DVec3, w: DVec3) -> Option<(f64, f64)> {
-    let bb = (b * b * w).element_sum();
+fn quadratic(a: DVec3, b: DVec3, w: DVec3, bb: f64) -> Option<(f64, f64)> {
     let ab = (a * b * w).element_sum();
     let aa = (a * a * w).element_sum();
     if bb <= 0.0 {
@@ -154,64 +190,19 @@ pub fn outside_cells_while(
     mut f: impl FnMut(Cell) -> bool,
 ) -> bool {
     let mut go = true;
-    let dims = grid.dims;
+    let [sampling, offset] = &grid.inside_runs;
     let done = columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
-        outside_in_column(
-            (&grid.sample_of_cell, dims),
-            [i, j],
-            [k0, k1],
-            |s| *s != NONE,
-            |k| {
-                go &= f(Cell::sampling([i, j, k]));
-            },
-        );
+        sampling.for_each_gap([i, j], [k0, k1], |k| go &= f(Cell::sampling([i, j, k])));
         go
     });
     if !done {
         return false;
     }
-    let dims = offset_dims(grid.dims);
     let origin = grid.origin + DVec3::splat(0.5 * grid.h);
     columns_in(origin, grid.h, v, |i, j, k0, k1| {
-        outside_in_column(
-            (&grid.offset_inside, dims),
-            [i, j],
-            [k0, k1],
-            |&b| b,
-            |k| {
-                go &= f(Cell::offset([i, j, k]));
-            },
-        );
+        offset.for_each_gap([i, j], [k0, k1], |k| go &= f(Cell::offset([i, j, k])));
         go
     })
-}
-
-/// Call `f(k)` for each `k` in `k0..=k1` whose cell `(i, j, k)` of a lattice with per-cell
-/// values `cells` (dimensions `dims`) is not `inside`; every cell beyond the lattice is.
-#[inline]
-fn outside_in_column<T>(
-    (cells, dims): (&[T], [usize; 3]),
-    [i, j]: [i64; 2],
-    [k0, k1]: [i64; 2],
-    inside: impl Fn(&T) -> bool,
-    mut f: impl FnMut(i64),
-) {
-    let [nx, ny, nz] = dims;
-    if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
-        (k0..=k1).for_each(f);
-        return;
-    }
-    // Below and above the lattice everything is outside; in it, one strided walk.
-    let (lo, hi) = (k0.max(0), k1.min(nz as i64 - 1));
-    (k0..lo.min(k1 + 1)).for_each(&mut f);
-    let stride = nx * ny;
-    let base = i as usize + nx * j as usize;
-    for k in lo..=hi {
-        if !inside(&cells[base + stride * k as usize]) {
-            f(k);
-        }
-    }
-    ((hi + 1).max(k0)..=k1).for_each(f);
 }
 
 /// Call `f(i, j, k0, k1)` for every column `(i, j)` of the lattice `origin + h (i, j, k)` that
@@ -226,8 +217,8 @@ fn columns_in(
     let (lo, hi) = v.aabb();
     let to_l = |p: DVec3| (p - origin) / h;
     let (l0, l1) = (to_l(lo), to_l(hi));
-    let (i0, i1) = (l0.x.ceil() as i64, l1.x.floor() as i64);
-    let (j0, j1) = (l0.y.ceil() as i64, l1.y.floor() as i64);
+    let (i0, i1) = (ceil_i64(l0.x), floor_i64(l1.x));
+    let (j0, j1) = (ceil_i64(l0.y), floor_i64(l1.y));
     // Local coordinates of a cell centre are affine in (i, j, k): t = base + i di + j dj + k dk.
     let inv_r = 1.0 / v.radii;
     let at = v.axes.transpose();
@@ -235,14 +226,15 @@ fn columns_in(
     let di = (at * DVec3::X) * h * inv_r;
     let dj = (at * DVec3::Y) * h * inv_r;
     let dk = (at * DVec3::Z) * h * inv_r;
+    let along = Along::new(v, dk);
     for j in j0..=j1 {
         for i in i0..=i1 {
             let a = base + di * i as f64 + dj * j as f64;
-            if let Some((t0, t1)) = interval(v, a, dk) {
+            if let Some((t0, t1)) = along.interval(a) {
                 // A hair of slack so that cells exactly on the boundary count as inside,
                 // matching `BoundingVolume::contains`.
-                let k0 = (t0 - 1e-9).ceil() as i64;
-                let k1 = (t1 + 1e-9).floor() as i64;
+                let k0 = ceil_i64(t0 - 1e-9);
+                let k1 = floor_i64(t1 + 1e-9);
                 if k0 <= k1 && !f(i, j, k0, k1) {
                     return false;
                 }

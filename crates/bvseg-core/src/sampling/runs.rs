@@ -72,6 +72,28 @@ impl InsideRuns {
         }
         n
     }
+
+    /// Call `f(k)` for each `k` in `k0..=k1`, in order, whose cell `(i, j, k)` is not inside
+    /// (every cell beyond the lattice is outside): the gaps between the column's runs, so the
+    /// cost follows the outside cells, not the inside ones.
+    #[inline]
+    pub fn for_each_gap(&self, [i, j]: [i64; 2], [k0, k1]: [i64; 2], mut f: impl FnMut(i64)) {
+        if i < 0 || j < 0 || i >= self.nx as i64 || j >= self.ny as i64 {
+            (k0..=k1).for_each(f);
+            return;
+        }
+        let c = i as usize + self.nx * j as usize;
+        let mut next = k0;
+        for &[a, b] in &self.runs[self.start[c] as usize..self.start[c + 1] as usize] {
+            let (a, b) = (i64::from(a), i64::from(b));
+            if a > k1 {
+                break;
+            }
+            (next..a.min(k1 + 1)).for_each(&mut f);
+            next = next.max(b + 1);
+        }
+        (next..=k1).for_each(f);
+    }
 }
 
 #[cfg(test)]
@@ -79,7 +101,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn counts_match_a_cell_by_cell_walk() {
+    fn counts_and_gaps_match_a_cell_by_cell_walk() {
         let dims = [5, 4, 23];
         // A pattern with runs at both ends of columns, single cells and empty columns.
         let inside = |c: usize| {
@@ -100,6 +122,17 @@ mod tests {
                             })
                             .count();
                         assert_eq!(runs.count([i, j], [k0, k1]), walk, "{i} {j} {k0} {k1}");
+                        let mut gaps = Vec::new();
+                        runs.for_each_gap([i, j], [k0, k1], |k| gaps.push(k));
+                        let outside: Vec<i64> = (k0..=k1)
+                            .filter(|&k| {
+                                !((0..5).contains(&i)
+                                    && (0..4).contains(&j)
+                                    && (0..23).contains(&k)
+                                    && inside((i + 5 * (j + 4 * k)) as usize))
+                            })
+                            .collect();
+                        assert_eq!(gaps, outside, "{i} {j} {k0} {k1}");
                     }
                 }
             }
