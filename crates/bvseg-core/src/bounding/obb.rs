@@ -404,10 +404,12 @@ fn refine(mut r: DMat3, mut vol: f64, v: &[DVec3], min_r: f64) -> (f64, DMat3) {
     let (mut turned, mut allowed) = (0.0, -1.0);
     let mut step = 0.05;
     while step > 1e-5 {
+        // The rotations by +-step, computed once per step size rather than per trial.
+        let turns = [1.0, -1.0].map(|sign: f64| math::sin_cos(sign * step));
         for _ in 0..PASSES {
             let mut improved = false;
             for axis in 0..3 {
-                for sign in [1.0, -1.0] {
+                for &(s, c) in &turns {
                     // Rebuilt when spent, or when much looser than the current step needs.
                     if turned + step > allowed || allowed > 4.0 * BUDGET * step {
                         // A frame turned by at most `allowed` changes the difference of two
@@ -425,7 +427,6 @@ fn refine(mut r: DMat3, mut vol: f64, v: &[DVec3], min_r: f64) -> (f64, DMat3) {
                         }));
                     }
                     let mut rot = DMat3::IDENTITY;
-                    let (s, c) = math::sin_cos(sign * step);
                     let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
                     rot.col_mut(i)[i] = c;
                     rot.col_mut(i)[j] = s;

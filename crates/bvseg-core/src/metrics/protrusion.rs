@@ -80,6 +80,7 @@ pub fn protrusion_capped(
         Some(d)
     });
     let value = exact.unwrap_or_else(|| protrusion_bound(v, grid, others, points));
+    crate::work::add(spent.get() as usize);
     (value, spent.get())
 }
 

@@ -43,12 +43,10 @@ pub struct Grid {
     pub points: Vec<DVec3>,
     /// For each sample, its face neighbours (-x, +x, -y, +y, -z, +z) that are samples, or [`NONE`].
     pub neighbors: Vec<[u32; 6]>,
-    /// Inside test of the offset lattice: cell `(i, j, k)` of it (index
-    /// `i + (nx + 1) * (j + (ny + 1) * k)`) has its centre at `origin + h (i + 1/2, j + 1/2,
-    /// k + 1/2)`, for `0 <= i <= nx` and so on.
-    pub offset_inside: Vec<bool>,
     /// The inside cells of the sampling lattice and of the offset one, as runs per column
-    /// (for counting a volume's outside cells column by column).
+    /// (for counting and listing a volume's outside cells column by column). Cell `(i, j, k)`
+    /// of the offset lattice (dimensions [`offset_dims`]) has its centre at
+    /// `origin + h (i + 1/2, j + 1/2, k + 1/2)`; the runs are all that is kept of it.
     pub inside_runs: [InsideRuns; 2],
 }
 
@@ -184,12 +182,13 @@ impl Grid {
             points,
             neighbors: Vec::new(),
             inside_runs: Default::default(),
-            offset_inside,
         };
         grid.inside_runs = [
             InsideRuns::new(dims, |c| grid.sample_of_cell[c] != NONE),
-            InsideRuns::new(offset_dims(dims), |c| grid.offset_inside[c]),
+            InsideRuns::new(offset_dims(dims), |c| offset_inside[c]),
         ];
+        // Freed before the neighbour lists, the largest array, are built.
+        drop(offset_inside);
         grid.neighbors = (0..grid.points.len())
             .map(|s| {
                 let [i, j, k] = grid.coords[s];
