@@ -11,6 +11,10 @@ use crate::Mesh;
 /// Triangles per leaf.
 const LEAF: usize = 4;
 
+/// Entries of a query's stack: the tree of at most `2^32` triangles, split at the median, has
+/// fewer than 33 levels.
+const STACK: usize = 72;
+
 #[derive(Debug, Clone)]
 struct Node {
     lo: DVec3,
@@ -95,9 +99,15 @@ impl SurfaceDistance {
         if self.nodes.is_empty() {
             return (best, 0);
         }
-        let mut stack: Vec<(u32, f64)> = vec![(0, box_distance_squared(&self.nodes[0], p))];
+        // The tree is balanced (median splits), so the stack holds at most one node per level
+        // plus one: a fixed array, where a vector cost an allocation per query.
+        let mut stack = [(0u32, 0.0f64); STACK];
+        stack[0] = (0, box_distance_squared(&self.nodes[0], p));
+        let mut top = 1;
         let mut visited = 0usize;
-        while let Some((i, d)) = stack.pop() {
+        while top > 0 {
+            top -= 1;
+            let (i, d) = stack[top];
             if d >= best {
                 continue;
             }
@@ -114,13 +124,13 @@ impl SurfaceDistance {
                 let dl = box_distance_squared(&self.nodes[l as usize], p);
                 let dr = box_distance_squared(&self.nodes[r as usize], p);
                 // The nearer child is searched first (pushed last).
-                if dl <= dr {
-                    stack.push((r, dr));
-                    stack.push((l, dl));
+                let pair = if dl <= dr {
+                    [(r, dr), (l, dl)]
                 } else {
-                    stack.push((l, dl));
-                    stack.push((r, dr));
-                }
+                    [(l, dl), (r, dr)]
+                };
+                stack[top..top + 2].copy_from_slice(&pair);
+                top += 2;
             }
         }
         (best, visited)
