@@ -301,8 +301,8 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             }
             cands.push(mv);
         }
-        // As the pass starts; a part changes at most once in a pass, as the pass's last use
-        // of it.
+        // The members as the pass starts hold for its connectivity checks too: a pass moves
+        // samples of each part at most once (see `touched`), after checking that move.
         let members = part.members();
         fit_moves(mesh, solid, fitter, (part, &members), &cands, &fits, among);
         // Gains against the current state.

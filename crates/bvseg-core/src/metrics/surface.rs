@@ -66,12 +66,11 @@ impl SurfaceDistance {
     }
 
     /// [`SurfaceDistance::distance`], adding the nodes and triangles it visits to `spent`;
-    /// `None` (without searching) once `spent` exceeds `cap`. The caller adds `spent` to
-    /// [`crate::work`] once, rather than every query contending for that shared counter.
-    /// `bound` is an upper bound of
+    /// `None` (without searching) once `spent` exceeds `cap`. `bound` is an upper bound of
     /// the distance (infinite if none is known): with a good one, the search prunes most of
     /// the tree, and the result is exact either way (if no triangle is nearer than the bound,
-    /// the distance is the bound).
+    /// the distance is the bound). The caller adds `spent` to [`crate::work`], once, rather
+    /// than every query contending for that shared counter.
     pub fn distance_within(
         &self,
         p: DVec3,
