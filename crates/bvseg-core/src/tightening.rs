@@ -459,3 +459,56 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
     }
     moves
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::initialization::cvt;
+    use crate::sampling::Grid;
+    use glam::DVec3;
+
+    /// The check over a part's members agrees with a flood of the whole labelling, on a holey
+    /// solid of two pieces where layers often cut parts apart.
+    #[test]
+    fn a_part_stays_connected_as_a_flood_of_the_whole_solid_says() {
+        let g = Grid::from_inside_fn(DVec3::ZERO, DVec3::new(2.0, 2.0, 0.5), 0.1, |p| {
+            let hole = ((p.x * 5.0) as i64 % 3 == 1) && ((p.y * 5.0) as i64 % 3 == 1);
+            let gap = (0.95..1.05).contains(&p.x);
+            (0.0..=2.0).contains(&p.x)
+                && (0.0..=2.0).contains(&p.y)
+                && (0.0..=0.5).contains(&p.z)
+                && !hole
+                && !gap
+        });
+        let solid = Solid::new(g);
+        let (mut kept, mut cut) = (0, 0);
+        for round in 0..30u64 {
+            let part = cvt(&solid, 3 + round as usize % 5, round);
+            let members = part.members();
+            for ((a, _), layer) in layers(&solid, &part, |_, _| true) {
+                let got = stays_connected(&solid, &part, (a, &members[a as usize]), &layer);
+                // The reference: the layer relabelled apart, then one piece per component of
+                // the solid among what is left of part `a`.
+                let mut labels = part.labels.clone();
+                for &s in &layer {
+                    labels[s as usize] = part.k() as u32;
+                }
+                let (piece, _) = crate::flooding::pieces(&solid.grid, &labels);
+                let mut per_comp: BTreeMap<u32, u32> = BTreeMap::new();
+                let mut want = true;
+                for s in (0..labels.len()).filter(|&s| labels[s] == a) {
+                    let first = *per_comp.entry(solid.components[s]).or_insert(piece[s]);
+                    want &= first == piece[s];
+                }
+                want &= !per_comp.is_empty();
+                assert_eq!(got, want, "round {round}, part {a}");
+                if want {
+                    kept += 1;
+                } else {
+                    cut += 1;
+                }
+            }
+        }
+        assert!(kept > 50 && cut > 5, "kept {kept}, cut {cut}");
+    }
+}
