@@ -45,7 +45,7 @@ pub struct Grid {
     pub neighbors: Vec<[u32; 6]>,
     /// The inside cells of the sampling lattice and of the offset one, as runs per column
     /// (for counting and listing a volume's outside cells column by column). Cell `(i, j, k)`
-    /// of the offset lattice (dimensions [`offset_dims`]) has its centre at
+    /// of the offset lattice (`0 <= i <= nx` and so on) has its centre at
     /// `origin + h (i + 1/2, j + 1/2, k + 1/2)`; the runs are all that is kept of it.
     pub inside_runs: [InsideRuns; 2],
 }
