@@ -32,7 +32,7 @@ use glam::DVec3;
 
 use crate::math::{ceil_i64, floor_i64};
 use crate::sampling::Grid;
-use crate::volume::{BoundingVolume, Shape};
+use crate::volume::{BoundingVolume, Polytope, Shape};
 
 /// Outside-volume figures of a set of volumes.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,6 +56,8 @@ struct Along<'a> {
     bb: f64,
     /// A capsule's ends: their weights and `sum_j w_j b_j^2`.
     ends: (DVec3, f64),
+    /// A hull's face planes prepared for `b` (see [`Polytope::planes_along`]).
+    planes: Vec<(DVec3, f64, f64)>,
 }
 
 /// `sum_j w_j b_j^2`.
@@ -81,7 +83,14 @@ impl<'a> Along<'a> {
         } else {
             (DVec3::ZERO, 0.0)
         };
-        Self { v, b, bb, ends }
+        let planes = v.polytope().map_or(Vec::new(), |p| p.planes_along(b));
+        Self {
+            v,
+            b,
+            bb,
+            ends,
+            planes,
+        }
     }
 
     /// The range of `k` with `a + k b` inside the shape, or `None`.
@@ -102,7 +111,8 @@ impl<'a> Along<'a> {
                     .chain(ends.into_iter().flatten())
                     .reduce(|x, y| (x.0.min(y.0), x.1.max(y.1)))
             }
-            Shape::Hull => self.v.polytope().and_then(|p| p.interval(a, b)),
+            Shape::Hull if self.v.polytope().is_some() => Polytope::interval_along(&self.planes, a),
+            Shape::Hull => None,
         }
     }
 

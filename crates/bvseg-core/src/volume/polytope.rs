@@ -95,12 +95,20 @@ impl Polytope {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// The range of `k` with `a + k b` inside, or `None`.
+    /// The face planes prepared for lines along `b` (see [`Polytope::interval_along`]): each
+    /// plane's normal, offset, and the normal's component along `b`, computed once for all
+    /// the lines.
+    pub fn planes_along(&self, b: DVec3) -> Vec<(DVec3, f64, f64)> {
+        self.planes.iter().map(|&(n, d)| (n, d, n.dot(b))).collect()
+    }
+
+    /// The range of `k` with `a + k b` inside, or `None`, for the `planes` of
+    /// [`Polytope::planes_along`]`(b)`.
     #[inline]
-    pub fn interval(&self, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
+    pub fn interval_along(planes: &[(DVec3, f64, f64)], a: DVec3) -> Option<(f64, f64)> {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        for &(n, d) in &self.planes {
-            let (na, nb) = (n.dot(a), n.dot(b));
+        for &(n, d, nb) in planes {
+            let na = n.dot(a);
             if nb.abs() < 1e-300 {
                 if na > d {
                     return None;
@@ -112,8 +120,12 @@ impl Polytope {
                 } else {
                     lo = lo.max(k);
                 }
+                // The range only narrows: once empty, it stays so.
+                if lo > hi {
+                    return None;
+                }
             }
         }
-        (lo <= hi).then_some((lo, hi))
+        Some((lo, hi))
     }
 }
