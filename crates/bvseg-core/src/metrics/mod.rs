@@ -32,7 +32,7 @@ use glam::DVec3;
 
 use crate::math::{ceil_i64, floor_i64};
 use crate::sampling::Grid;
-use crate::volume::{BoundingVolume, Polytope, Shape};
+use crate::volume::{BoundingVolume, PlanesAlong, Shape};
 
 /// Outside-volume figures of a set of volumes.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,8 +56,8 @@ struct Along<'a> {
     bb: f64,
     /// A capsule's ends: their weights and `sum_j w_j b_j^2`.
     ends: (DVec3, f64),
-    /// A hull's face planes prepared for `b` (see [`Polytope::planes_along`]).
-    planes: Vec<(DVec3, f64, f64)>,
+    /// A hull's face planes prepared for `b`.
+    planes: Option<PlanesAlong>,
 }
 
 /// `sum_j w_j b_j^2`.
@@ -83,7 +83,7 @@ impl<'a> Along<'a> {
         } else {
             (DVec3::ZERO, 0.0)
         };
-        let planes = v.polytope().map_or(Vec::new(), |p| p.planes_along(b));
+        let planes = v.polytope().map(|p| p.planes_along(b));
         Self {
             v,
             b,
@@ -111,8 +111,7 @@ impl<'a> Along<'a> {
                     .chain(ends.into_iter().flatten())
                     .reduce(|x, y| (x.0.min(y.0), x.1.max(y.1)))
             }
-            Shape::Hull if self.v.polytope().is_some() => Polytope::interval_along(&self.planes, a),
-            Shape::Hull => None,
+            Shape::Hull => self.planes.as_ref().and_then(|p| p.interval(a)),
         }
     }
 

@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
 
+pub(crate) use polytope::PlanesAlong;
 pub use polytope::Polytope;
 
 /// The kind of a single bounding volume.

@@ -95,19 +95,29 @@ impl Polytope {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// The face planes prepared for lines along `b` (see [`Polytope::interval_along`]): each
-    /// plane's normal, offset, and the normal's component along `b`, computed once for all
-    /// the lines.
-    pub fn planes_along(&self, b: DVec3) -> Vec<(DVec3, f64, f64)> {
-        self.planes.iter().map(|&(n, d)| (n, d, n.dot(b))).collect()
+    /// The range of `k` with `a + k b` inside, or `None`.
+    pub fn interval(&self, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
+        self.planes_along(b).interval(a)
     }
 
-    /// The range of `k` with `a + k b` inside, or `None`, for the `planes` of
-    /// [`Polytope::planes_along`]`(b)`.
+    /// The face planes prepared for lines along `b`: what [`Polytope::interval`] needs of
+    /// them, for many lines at once.
+    pub(crate) fn planes_along(&self, b: DVec3) -> PlanesAlong {
+        PlanesAlong(self.planes.iter().map(|&(n, d)| (n, d, n.dot(b))).collect())
+    }
+}
+
+/// A polytope's face planes prepared for many lines along one direction `b`: each plane's
+/// normal, offset, and the normal's component along `b`, computed once for all the lines.
+#[derive(Debug, Clone)]
+pub(crate) struct PlanesAlong(Vec<(DVec3, f64, f64)>);
+
+impl PlanesAlong {
+    /// The range of `k` with `a + k b` inside, or `None`.
     #[inline]
-    pub fn interval_along(planes: &[(DVec3, f64, f64)], a: DVec3) -> Option<(f64, f64)> {
+    pub(crate) fn interval(&self, a: DVec3) -> Option<(f64, f64)> {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        for &(n, d, nb) in planes {
+        for &(n, d, nb) in &self.0 {
             let na = n.dot(a);
             if nb.abs() < 1e-300 {
                 if na > d {
