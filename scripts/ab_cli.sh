@@ -5,8 +5,10 @@
 #
 # Usage: scripts/ab_cli.sh ROUNDS MESH "SEGMENT ARGS" BIN...
 #   e.g. scripts/ab_cli.sh 5 ../shared/meshes/human_1.obj "" /tmp/bvseg_old target/release/bvseg
+# The output is a .json file; set AB_FORMAT=glb (or xml, obj) to write that format instead
+# (the JSON alone carries the hierarchy, which the run then skips).
 set -euo pipefail
-rounds=$1 mesh=$2 args=$3
+rounds=$1 mesh=$2 args=$3 ext=${AB_FORMAT:-json}
 shift 3
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -15,7 +17,7 @@ for r in $(seq "$rounds"); do
     for bin in "$@"; do
         # shellcheck disable=SC2086
         /usr/bin/time -f "%e %U %M" -o "$tmp/t" "$bin" segment "$mesh" $args --quiet \
-            -o "$tmp/out$i.json" >/dev/null
+            -o "$tmp/out$i.$ext" >/dev/null
         echo "$(cat "$tmp/t")" >>"$tmp/times$i"
         i=$((i + 1))
     done
@@ -23,7 +25,7 @@ done
 i=0
 for bin in "$@"; do
     same=yes
-    cmp -s "$tmp/out0.json" "$tmp/out$i.json" || same=no
+    cmp -s "$tmp/out0.$ext" "$tmp/out$i.$ext" || same=no
     med() { cut -d' ' -f"$1" "$tmp/times$i" | sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
     best=$(cut -d' ' -f1 "$tmp/times$i" | sort -n | head -1)
     peak=$(cut -d' ' -f3 "$tmp/times$i" | sort -n | tail -1)

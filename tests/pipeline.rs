@@ -282,3 +282,34 @@ fn a_cancelled_run_ends_with_cancelled() {
         Some(bvseg::Error::Cancelled)
     );
 }
+
+#[test]
+fn the_hierarchy_is_optional_and_changes_nothing_else() {
+    let mesh = union(&[
+        capsule(DVec3::ZERO, DVec3::new(3.0, 0.0, 0.0), 0.5, 12),
+        capsule(DVec3::ZERO, DVec3::new(0.0, 2.5, 0.0), 0.4, 12),
+    ]);
+    let params = Params {
+        samples: 3_000,
+        k: Some(5),
+        ..Params::default()
+    };
+    let with = segment(&mesh, &params).expect("segments");
+    let without = segment(
+        &mesh,
+        &Params {
+            hierarchy: false,
+            ..params
+        },
+    )
+    .expect("segments");
+    assert_eq!(with.hierarchy.len(), 2 * with.parts.len() - 1);
+    assert!(without.hierarchy.is_empty());
+    assert_eq!(
+        Segmentation {
+            hierarchy: Vec::new(),
+            ..with
+        },
+        without
+    );
+}

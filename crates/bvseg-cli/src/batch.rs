@@ -65,16 +65,18 @@ struct Row {
 }
 
 pub fn run(args: &BatchArgs) -> anyhow::Result<ExitCode> {
-    let params = args.params.params()?;
     let mut exts = Vec::new();
+    let mut formats = Vec::new();
     for f in &args.formats {
         let ext = f.trim().trim_start_matches('.').to_ascii_lowercase();
-        OutputFormat::from_path(Path::new(&format!("x.{ext}")))
+        let format = OutputFormat::from_path(Path::new(&format!("x.{ext}")))
             .with_context(|| format!("--formats: '{f}'"))?;
         if !exts.contains(&ext) {
             exts.push(ext);
+            formats.push(format);
         }
     }
+    let params = args.params.params(&formats)?;
     let files = list_meshes(&args.dir)?;
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("{}: cannot create the directory", args.output.display()))?;

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
 use bvseg_core::{Cancel, Kinds, Mesh, Params, Segmentation, Segmenter, Step, Target};
+use bvseg_io::export::OutputFormat;
 use bvseg_io::{LoadOptions, LoadedMesh};
 use clap::Args;
 
@@ -146,8 +147,9 @@ fn parse_target(s: &str) -> Result<Kinds, String> {
 }
 
 impl ParamArgs {
-    /// The core's parameters, validated, and within `--max-samples`.
-    pub fn params(&self) -> anyhow::Result<Params> {
+    /// The core's parameters, validated, and within `--max-samples`, for a run that writes
+    /// `formats` (the hierarchy is built only when one of them carries it).
+    pub fn params(&self, formats: &[OutputFormat]) -> anyhow::Result<Params> {
         if self.samples > self.max_samples {
             bail!(
                 "--samples {} is above --max-samples {}; raise --max-samples if you mean it",
@@ -169,6 +171,7 @@ impl ParamArgs {
             merge: !self.no_merge,
             polish: !self.no_polish,
             margin: self.margin,
+            hierarchy: formats.iter().any(|f| f.carries_hierarchy()),
             ..Params::default()
         };
         params.validate()?;

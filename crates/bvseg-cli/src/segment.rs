@@ -54,8 +54,13 @@ pub struct SegmentArgs {
 }
 
 pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
-    let params = args.params.params()?;
     check_outputs(args)?;
+    let formats: Vec<OutputFormat> = args
+        .output
+        .iter()
+        .filter_map(|o| OutputFormat::from_path(o).ok())
+        .collect();
+    let params = args.params.params(&formats)?;
 
     let (name, loaded) = common::load_solid(args.mesh.as_deref(), &args.input, args.quiet)?;
     let mut warnings = loaded.warnings();
@@ -289,7 +294,7 @@ mod tests {
             (p.tov, p.mov, p.max_k, p.samples, p.seed),
             (d.tov, d.mov, d.max_k, d.samples, d.seed)
         );
-        assert_eq!(p.params().unwrap().kinds, d.kinds);
+        assert_eq!(p.params(&[]).unwrap().kinds, d.kinds);
         assert_eq!(p.max_hull_vertices, d.max_hull_vertices);
         assert!(a.mesh.is_none() && p.k.is_none() && a.output.is_empty() && p.threads.is_none());
     }
@@ -345,31 +350,44 @@ mod tests {
         let caps = parse(&["--bv", "obb,capsule"])
             .unwrap()
             .params
-            .params()
+            .params(&[])
             .unwrap();
         assert_eq!(caps.kinds, Kinds::OBB.with(Shape::Capsule));
         let parry = parse(&["--target", "parry"])
             .unwrap()
             .params
-            .params()
+            .params(&[])
             .unwrap();
         assert!(!parry.kinds.contains(Shape::Ellipsoid) && !parry.kinds.contains(Shape::Hull));
         let hull = parse(&["--target", "avian-hull", "--max-hull-vertices", "64"]).unwrap();
-        let hp = hull.params.params().unwrap();
+        let hp = hull.params.params(&[]).unwrap();
         assert!(hp.kinds.contains(Shape::Hull) && hp.max_hull_vertices == 64);
         assert!(parse(&["--target", "unity"]).is_err());
         assert!(parse(&["--target", "parry", "--bv", "sphere"]).is_err());
         let few = parse(&["--max-hull-vertices", "3"])
             .unwrap()
             .params
-            .params();
+            .params(&[]);
         assert!(few.unwrap_err().to_string().contains("max_hull_vertices"));
+    }
+
+    #[test]
+    fn the_hierarchy_is_built_only_for_an_output_that_carries_it() {
+        let p = parse(&[]).unwrap().params;
+        let with = |formats: &[OutputFormat]| p.params(formats).unwrap().hierarchy;
+        assert!(!with(&[]));
+        assert!(!with(&[
+            OutputFormat::Glb,
+            OutputFormat::Mjcf,
+            OutputFormat::Obj
+        ]));
+        assert!(with(&[OutputFormat::Glb, OutputFormat::Json]));
     }
 
     #[test]
     fn sample_limit_is_enforced() {
         let a = parse(&["--samples", "20000", "--max-samples", "10000"]).unwrap();
-        let e = a.params.params().unwrap_err().to_string();
+        let e = a.params.params(&[]).unwrap_err().to_string();
         assert!(e.contains("above --max-samples 10000"), "{e}");
     }
 }

@@ -117,7 +117,8 @@ pub struct Segmentation {
     /// Every refinement step, in order.
     pub history: Vec<Step>,
     /// Binary hierarchy over the parts: nodes `0..k` are the parts' leaves, the root is the
-    /// last node (with one part, that single leaf).
+    /// last node (with one part, that single leaf). Empty when [`crate::Params::hierarchy`]
+    /// is off.
     pub hierarchy: Vec<HierarchyNode>,
     /// For each input triangle, the part whose volume encloses it.
     pub triangle_parts: Vec<u32>,

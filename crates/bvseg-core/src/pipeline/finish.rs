@@ -146,12 +146,16 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             protrusion: cur.pr[i],
         })
         .collect();
-    let adjacency = cur.part.adjacency(&ctx.solid.grid);
-    let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
-    let margin = ctx.params.margin;
-    let hierarchy = hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
-        ctx.fitter.fit_points(&ctx.solid, p).grown(margin)
-    });
+    let hierarchy = if ctx.params.hierarchy {
+        let adjacency = cur.part.adjacency(&ctx.solid.grid);
+        let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
+        let margin = ctx.params.margin;
+        hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
+            ctx.fitter.fit_points(&ctx.solid, p).grown(margin)
+        })
+    } else {
+        Vec::new()
+    };
     Segmentation {
         kinds: ctx.params.kinds,
         parts,

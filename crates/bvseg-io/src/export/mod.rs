@@ -56,6 +56,14 @@ impl OutputFormat {
             }),
         }
     }
+
+    /// Whether this format writes [`bvseg_core::Segmentation::hierarchy`] (only the JSON
+    /// document does), so that a run whose outputs do not can skip building it
+    /// ([`bvseg_core::Params::hierarchy`]).
+    #[must_use]
+    pub fn carries_hierarchy(self) -> bool {
+        self == Self::Json
+    }
 }
 
 /// What the writers may add beyond the volumes.
