@@ -305,6 +305,19 @@ fn the_hierarchy_is_optional_and_changes_nothing_else() {
     .expect("segments");
     assert_eq!(with.hierarchy.len(), 2 * with.parts.len() - 1);
     assert!(without.hierarchy.is_empty());
+    // Built afterwards, on demand, it is the one the run would have built.
+    let mut run = bvseg::Segmenter::new(
+        &mesh,
+        &Params {
+            hierarchy: false,
+            ..params.clone()
+        },
+    )
+    .expect("samples");
+    assert!(run.hierarchy().is_empty());
+    assert_eq!(run.take_result().as_ref(), Ok(&without));
+    assert_eq!(run.hierarchy(), with.hierarchy);
+    assert!(matches!(run.take_result(), Err(bvseg::Error::Internal(_))));
     assert_eq!(
         Segmentation {
             hierarchy: Vec::new(),

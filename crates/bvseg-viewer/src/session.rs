@@ -35,8 +35,9 @@ enum Stage {
     Sampling,
     /// Stepping.
     Stepping(Box<Segmenter>),
-    /// Finished.
-    Done(Box<Segmentation>),
+    /// Finished; the segmenter is kept, until asked for, to build the hierarchy the run went
+    /// without (see [`Session::result_with_hierarchy`]).
+    Done(Box<Segmentation>, Option<Box<Segmenter>>),
     /// The core refused the input.
     Failed(Error),
 }
@@ -125,11 +126,12 @@ impl Session {
                     Progress::Running
                 }
                 None => {
-                    let Stage::Stepping(seg) = std::mem::replace(&mut self.stage, Stage::Sampling)
+                    let Stage::Stepping(mut seg) =
+                        std::mem::replace(&mut self.stage, Stage::Sampling)
                     else {
                         unreachable!("matched above");
                     };
-                    let result = match seg.finish() {
+                    let result = match seg.take_result() {
                         Ok(r) => r,
                         Err(e) => {
                             self.stage = Stage::Failed(e);
@@ -148,11 +150,12 @@ impl Session {
                             );
                         }
                     }
-                    self.stage = Stage::Done(Box::new(result));
+                    let keep = (!self.params.hierarchy).then_some(seg);
+                    self.stage = Stage::Done(Box::new(result), keep);
                     Progress::Done
                 }
             },
-            Stage::Done(_) => Progress::Done,
+            Stage::Done(..) => Progress::Done,
             Stage::Failed(_) => Progress::Failed,
         }
     }
@@ -212,12 +215,24 @@ impl Session {
         &self.snapshots
     }
 
-    /// The result, once done.
+    /// The result, once done. Its hierarchy is empty when the parameters went without it.
     pub fn result(&self) -> Option<&Segmentation> {
         match &self.stage {
-            Stage::Done(s) => Some(s),
+            Stage::Done(s, _) => Some(s),
             _ => None,
         }
+    }
+
+    /// The result with its hierarchy, built now if the run went without it (the app runs
+    /// without, as only the JSON export carries it).
+    pub fn result_with_hierarchy(&mut self) -> Option<&Segmentation> {
+        let Stage::Done(res, run) = &mut self.stage else {
+            return None;
+        };
+        if let Some(run) = run.take() {
+            res.hierarchy = run.hierarchy();
+        }
+        Some(res)
     }
 
     /// The core's error, if the run failed.
@@ -230,7 +245,7 @@ impl Session {
 
     /// Whether the run is over (done or failed).
     pub fn is_over(&self) -> bool {
-        matches!(self.stage, Stage::Done(_) | Stage::Failed(_))
+        matches!(self.stage, Stage::Done(..) | Stage::Failed(_))
     }
 
     /// Number of interior samples (0 before sampling).
@@ -294,6 +309,28 @@ mod tests {
         // Stepping gives what the one-call API gives.
         let direct = bvseg_core::segment(&mesh, &params).unwrap();
         assert_eq!(direct.metrics, res.metrics);
+    }
+
+    #[test]
+    fn a_run_without_the_hierarchy_builds_it_when_asked() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 3000,
+            k: Some(4),
+            ..Params::default()
+        };
+        let direct = bvseg_core::segment(&mesh, &params).unwrap();
+        let mut s = Session::new(
+            mesh,
+            Params {
+                hierarchy: false,
+                ..params
+            },
+        );
+        while s.advance(Duration::from_secs(1)) == Progress::Running {}
+        assert!(s.result().unwrap().hierarchy.is_empty());
+        assert_eq!(s.result_with_hierarchy(), Some(&direct));
+        assert_eq!(s.result(), Some(&direct));
     }
 
     #[test]

@@ -145,7 +145,11 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     assert_eq!(h.state().shown_step(), Some(n - 1));
 
     // Result -> Save GLB… asks for a path and writes the file there.
-    let json = h.state().export_bytes(Export::Json).unwrap();
+    // The app runs without the hierarchy; the JSON export builds it.
+    assert!(result_of(&h).hierarchy.is_empty());
+    let json = h.state_mut().export_bytes(Export::Json).unwrap();
+    let nodes = 2 * result_of(&h).parts.len() - 1;
+    assert_eq!(result_of(&h).hierarchy.len(), nodes);
     assert_eq!(json, bvseg_io::to_json_string(result_of(&h)).into_bytes());
     let dir = bvseg_testkit::scratch("controls_change_the_run_and_the_parts_table_highlights");
     let out = dir.join("dog.glb");
@@ -165,7 +169,7 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
     h.run_steps(2);
     let glb =
         std::fs::read(&out).unwrap_or_else(|e| panic!("no GLB ({e}): {:?}", h.state().status()));
-    assert_eq!(glb, h.state().export_bytes(Export::Glb).unwrap());
+    assert_eq!(glb, h.state_mut().export_bytes(Export::Glb).unwrap());
     assert_eq!(&glb[..4], b"glTF");
     // The GLB holds the segmented mesh, which reads back whole.
     let options = bvseg_io::LoadOptions {
@@ -190,8 +194,11 @@ fn the_kinds_control_sets_the_runs_kinds() {
     assert_eq!(s.kinds, Kinds::PRIMITIVES);
     assert_eq!(
         s.params(),
-        Params::default(),
-        "the default settings are the core's defaults"
+        Params {
+            hierarchy: false,
+            ..Params::default()
+        },
+        "the default settings are the core's defaults (but for the hierarchy, built on export)"
     );
     assert!(
         h.query_by_label("Max hull vertices").is_none(),

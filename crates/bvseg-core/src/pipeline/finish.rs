@@ -7,7 +7,7 @@ use crate::metrics::{outside_from_cells, outside_volumes, Cell};
 use crate::refine::budget::work_budget;
 use crate::reshaping::reshape;
 use crate::tightening::{relieve_worst, tighten, Passes};
-use crate::{hierarchy, BoundingVolume, Metrics, Part, Segmentation, Step};
+use crate::{hierarchy, BoundingVolume, HierarchyNode, Metrics, Part, Segmentation, Step};
 
 /// Passes of the final tightening, of which 3 judge every move (the others only those that
 /// gained).
@@ -147,12 +147,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
         })
         .collect();
     let hierarchy = if ctx.params.hierarchy {
-        let adjacency = cur.part.adjacency(&ctx.solid.grid);
-        let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
-        let margin = ctx.params.margin;
-        hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
-            ctx.fitter.fit_points(&ctx.solid, p).grown(margin)
-        })
+        hierarchy_of(ctx, cur)
     } else {
         Vec::new()
     };
@@ -176,4 +171,15 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
         cell_size: ctx.solid.grid.h,
         budget_exhausted: false,
     }
+}
+
+/// The bounding-volume hierarchy over the parts of `cur` (see [`crate::hierarchy`]), grown
+/// by the margin.
+pub fn hierarchy_of(ctx: &Context, cur: &State) -> Vec<HierarchyNode> {
+    let adjacency = cur.part.adjacency(&ctx.solid.grid);
+    let hulls: Vec<Vec<DVec3>> = cur.fits.iter().map(|f| f.hull.clone()).collect();
+    let margin = ctx.params.margin;
+    hierarchy::build(hulls, &cur.volumes, &adjacency, |p| {
+        ctx.fitter.fit_points(&ctx.solid, p).grown(margin)
+    })
 }

@@ -33,7 +33,9 @@ use crate::refine::split::{Split, SplitStep};
 use crate::refine::{merge, Aim, Tolerances};
 use crate::sampling::Grid;
 use crate::tightening::tighten;
-use crate::{BoundingVolume, Cancel, Error, Mesh, Params, Segmentation, Step, StepKind};
+use crate::{
+    BoundingVolume, Cancel, Error, HierarchyNode, Mesh, Params, Segmentation, Step, StepKind,
+};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -157,6 +159,17 @@ impl Segmenter {
         self.state.as_ref().map_or(&[], |s| &s.volumes)
     }
 
+    /// The bounding-volume hierarchy over the current parts (after the last step, those of
+    /// the result), as [`Segmentation::hierarchy`] holds it when [`Params::hierarchy`] is on:
+    /// for a run made without it whose user turns out to want it (the viewer builds it only
+    /// for a JSON export). Empty before the first step.
+    #[must_use]
+    pub fn hierarchy(&self) -> Vec<HierarchyNode> {
+        self.state
+            .as_ref()
+            .map_or_else(Vec::new, |s| finish::hierarchy_of(&self.ctx, s))
+    }
+
     /// Whether [`Segmenter::step`] has returned `None`.
     #[must_use]
     pub fn is_done(&self) -> bool {
@@ -191,6 +204,17 @@ impl Segmenter {
     /// [`Error::Cancelled`] when the run's [`Cancel`] flag was set before it ended, and
     /// [`Error::Internal`] if the run broke one of its own invariants.
     pub fn finish(mut self) -> Result<Segmentation, Error> {
+        self.take_result()
+    }
+
+    /// Like [`Segmenter::finish`], keeping the segmenter, so that [`Segmenter::hierarchy`]
+    /// can still build the hierarchy of a run made without it. A second call returns
+    /// [`Error::Internal`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Segmenter::finish`].
+    pub fn take_result(&mut self) -> Result<Segmentation, Error> {
         while self.step().is_some() {}
         if self.ctx.cancel.is_cancelled() {
             return Err(Error::Cancelled);

@@ -70,6 +70,8 @@ impl Settings {
             tov: self.tov,
             max_protrusion: self.max_protrusion,
             max_k: self.max_k,
+            // Only the JSON export carries the hierarchy: it is built then.
+            hierarchy: false,
             ..Params::default()
         }
     }

@@ -98,11 +98,15 @@ impl ViewerApp {
     }
 
     /// The file content of `export` for the current result.
-    pub fn export_bytes(&self, export: Export) -> Option<Vec<u8>> {
-        let res = self.result()?;
+    pub fn export_bytes(&mut self, export: Export) -> Option<Vec<u8>> {
         Some(match export {
-            Export::Json => bvseg_io::to_json_string(res).into_bytes(),
-            Export::Glb => bvseg_io::export::to_glb(res, Some(&self.model.as_ref()?.mesh)),
+            Export::Json => {
+                let res = self.session.as_mut()?.result_with_hierarchy()?;
+                bvseg_io::to_json_string(res).into_bytes()
+            }
+            Export::Glb => {
+                bvseg_io::export::to_glb(self.result()?, Some(&self.model.as_ref()?.mesh))
+            }
         })
     }
 
