@@ -28,6 +28,7 @@ pub struct Given<'py> {
     pub seed: Option<Bound<'py, PyAny>>,
     pub merge: bool,
     pub polish: bool,
+    pub hierarchy: bool,
     pub margin: Option<f64>,
     pub threads: Option<Bound<'py, PyAny>>,
     pub timeout: Option<f64>,
@@ -118,7 +119,7 @@ fn target(name: &str) -> PyResult<Kinds> {
 }
 
 /// The keyword arguments `segment` takes besides the mesh and `progress`.
-pub const NAMES: [&str; 16] = [
+pub const NAMES: [&str; 17] = [
     "k",
     "tov",
     "max_protrusion",
@@ -133,6 +134,7 @@ pub const NAMES: [&str; 16] = [
     "threads",
     "merge",
     "polish",
+    "hierarchy",
     "margin",
     "timeout",
 ];
@@ -164,6 +166,7 @@ impl<'py> Given<'py> {
         let mut g = Given {
             merge: true,
             polish: true,
+            hierarchy: true,
             ..Given::default()
         };
         let Some(kwargs) = kwargs else {
@@ -206,6 +209,7 @@ impl<'py> Given<'py> {
                 "threads" => g.threads = v,
                 "merge" => g.merge = boolean(&key, &value)?,
                 "polish" => g.polish = boolean(&key, &value)?,
+                "hierarchy" => g.hierarchy = boolean(&key, &value)?,
                 "margin" => g.margin = Some(float(&key, &value)?),
                 "timeout" => g.timeout = Some(float(&key, &value)?),
                 _ => return Err(unknown(function, &key)),
@@ -276,6 +280,7 @@ impl<'py> Given<'py> {
             max_k: opt_size("max_k", &self.max_k)?.unwrap_or(d.max_k),
             merge: self.merge,
             polish: self.polish,
+            hierarchy: self.hierarchy,
             margin: self.margin.unwrap_or(d.margin),
             ..d
         };
@@ -345,6 +350,7 @@ pub fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("threads", py.None())?;
     out.set_item("merge", d.merge)?;
     out.set_item("polish", d.polish)?;
+    out.set_item("hierarchy", d.hierarchy)?;
     out.set_item("margin", d.margin)?;
     out.set_item("timeout", py.None())?;
     Ok(out)

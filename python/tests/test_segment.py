@@ -167,11 +167,21 @@ def test_result_fields(bunny12):
     assert "k=12" in repr(r)
 
 
+def test_without_the_hierarchy_only_the_hierarchy_is_missing(bunny12):
+    with_it = json.loads(bunny12.to_json())
+    r = bvseg.segment(BUNNY, k=12, hierarchy=False)
+    without = json.loads(r.to_json())
+    assert len(with_it["hierarchy"]) == 2 * 12 - 1 and without["hierarchy"] == []
+    assert {**without, "hierarchy": with_it["hierarchy"]} == with_it
+    assert (r.triangle_parts == bunny12.triangle_parts).all()
+
+
 def test_defaults_are_the_cores(run_cli):
     d = bvseg.DEFAULTS
     assert (d["tov"], d["max_protrusion"], d["max_k"], d["samples"], d["seed"]) == (0.3, 0.05, 96, 20000, 0)
     assert d["kinds"] == "ellipsoid,obb,sphere,capsule,cylinder" and d["max_hull_vertices"] == 32
     assert d["k"] is None and d["mov"] is None and d["merge"] and d["polish"] and d["margin"] == 0
+    assert d["hierarchy"] is True
     # The CLI's --help shows the same defaults.
     help_text = run_cli("segment", "--help").stdout
     assert "[default: 0.3]" in help_text and "[default: 20000]" in help_text and "[default: 96]" in help_text

@@ -316,6 +316,9 @@ Keyword arguments (the command line's options; the defaults are the core's):
 - ``merge`` ({DEFAULTS['merge']}), ``polish`` ({DEFAULTS['polish']}): ``False`` is
   ``--no-merge``, ``--no-polish``.
 - ``margin`` ({DEFAULTS['margin']}): grow every volume outward by this, in mesh units.
+- ``hierarchy`` ({DEFAULTS['hierarchy']}): build the bounding-volume hierarchy over the parts
+  (about a sixth of a default run); only :meth:`Segmentation.to_json` carries it, so
+  ``False`` suits a run written to GLB, MJCF or OBJ alone (its JSON then has an empty one).
 - ``timeout`` (none): give up after this many seconds with ``TimeoutError``.
 - ``progress``: called with a dict per refinement step (the keys of the file's ``history``:
   step, k, f, tov, mov, protrusion), with the GIL held; if it raises, the run is cancelled and

@@ -83,6 +83,7 @@ def segment(
     threads: int | None = ...,
     merge: bool = ...,
     polish: bool = ...,
+    hierarchy: bool = ...,
     margin: float | None = ...,
     timeout: float | None = ...,
     progress: Callable[[dict[str, Any]], object] | None = ...,

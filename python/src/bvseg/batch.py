@@ -329,6 +329,8 @@ def run(
         if ext not in exts:
             exts.append(ext)
     params = {k: v for k, v in (params or {}).items() if v is not None}
+    # Only the JSON document carries the hierarchy: without it, the runs skip building it.
+    params.setdefault("hierarchy", "json" in exts)
     cores = os.cpu_count() or 1
     if workers is not None and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
