@@ -12,7 +12,9 @@ use glam::DVec3;
 
 use crate::bounding::hull::hull_points;
 use crate::enclosure::Enclosure;
-use crate::metrics::{outside_cells, outside_count, protrusion_capped, Cell, SurfaceDistance};
+use crate::metrics::{
+    outside_cells, outside_count, protrusion_capped, Cell, Cells, SurfaceDistance,
+};
 use crate::moments::Moments;
 use crate::partition::Solid;
 use crate::{BoundingVolume, Cancel, Kinds, Mesh, Shape};
@@ -29,7 +31,7 @@ pub struct Fit {
     /// The fitted volume.
     pub volume: BoundingVolume,
     /// Lattice cells outside the solid whose centres the volume contains.
-    pub outside: Vec<Cell>,
+    pub outside: Cells,
     /// The kinds it was chosen among, each with the number of outside cells its volume had.
     pub counts: Vec<(Shape, usize)>,
     /// The volume's own protrusion (see [`crate::metrics::protrusion`]), measured when first
@@ -109,6 +111,9 @@ impl Fit {
             .fold(Kinds::only(self.volume.shape), |k, c| k.with(c.0))
     }
 
+    /// The fit's size for the cache's budget. Its outside cells count one [`Cell`] each, as
+    /// when they were stored one by one: what the cache keeps, and so the results of runs
+    /// that fill it, do not depend on how the cells are stored (their runs take less).
     fn bytes(&self) -> usize {
         std::mem::size_of::<Fit>()
             + self.hull.len() * std::mem::size_of::<DVec3>()

@@ -30,7 +30,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::math;
 
-use crate::metrics::{outside_cells, outside_cells_while, relative, Cell, Coverage, LATTICES};
+use crate::metrics::{outside_cells, outside_cells_while, relative, Cells, Coverage, LATTICES};
 use crate::partition::Solid;
 use crate::volume::{BoundingVolume, Shape};
 
@@ -61,11 +61,11 @@ pub fn reshape(
     solid: &Solid,
     points: &[&[DVec3]],
     volumes: &[BoundingVolume],
-    mut cells: Vec<Vec<Cell>>,
+    mut cells: Vec<Cells>,
     counts: &[f64],
     (min_r, budget): (f64, u64),
     fits: &(dyn Fn(&[DVec3], Shape) -> Vec<BoundingVolume> + Sync),
-) -> (Vec<BoundingVolume>, Vec<Vec<Cell>>) {
+) -> (Vec<BoundingVolume>, Vec<Cells>) {
     let grid = &solid.grid;
     // Cells the trials visited. Each trial's count is fixed by its volume and the round's
     // best, so the total after a round does not depend on the thread count.

@@ -12,7 +12,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::fitting::{Fit, Fitter};
-use crate::metrics::{relative, Coverage};
+use crate::metrics::{relative, Cells, Coverage};
 use crate::moments::Moments;
 use crate::partition::{Partition, Solid};
 use crate::pipeline::Context;
@@ -263,6 +263,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
     }
     let mut moves = 0;
     let min_part = min_part(solid, part);
+    let none = Cells::default();
     // Gain of each pair's move when last judged. A move that did not gain rarely starts to
     // after a few moves elsewhere, so most passes judge again only the moves that gained (or
     // are new). When that stalls, a full pass judges them all again, up to `full_passes` times.
@@ -294,8 +295,8 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             };
             // A move can take out of the union only the cells that no other volume covers:
             // with none, it cannot gain, and is not worth a refit either.
-            let old = [pair.0, pair.1].map(|i| fits[i as usize].outside.as_slice());
-            if cov.union_if(old, [&[], &[]]) == cov.union {
+            let old = [pair.0, pair.1].map(|i| &fits[i as usize].outside);
+            if cov.union_if(old, [&none, &none]) == cov.union {
                 last_gain.insert(pair, 0);
                 continue;
             }
@@ -313,8 +314,8 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
                 continue;
             };
             let old = [
-                fits[mv.from as usize].outside.as_slice(),
-                fits[mv.to as usize].outside.as_slice(),
+                &fits[mv.from as usize].outside,
+                &fits[mv.to as usize].outside,
             ];
             let gain = cov.union as i64 - cov.union_if(old, [&fa.outside, &fb.outside]) as i64;
             last_gain.insert((mv.from, mv.to), gain);
@@ -342,8 +343,8 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
                 continue;
             }
             let (old, new) = (
-                [fits[a].outside.as_slice(), fits[b].outside.as_slice()],
-                [fa.outside.as_slice(), fb.outside.as_slice()],
+                [&fits[a].outside, &fits[b].outside],
+                [&fa.outside, &fb.outside],
             );
             if cov.union_if(old, new) >= cov.union
                 || !stays_connected(solid, part, (mv.from, &members[a]), &mv.layer)
@@ -436,7 +437,7 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
             let mov = others
                 .max(relative(fa.outside.len(), mv.m_from.n))
                 .max(relative(fb.outside.len(), mv.m_to.n));
-            let old = [fits[a].outside.as_slice(), fits[b].outside.as_slice()];
+            let old = [&fits[a].outside, &fits[b].outside];
             let tov = relative(cov.union_if(old, [&fa.outside, &fb.outside]), total);
             if mov < cur_mov && tov < cur_tov.max(tov_tol) && best.is_none_or(|x| mov < x.0) {
                 best = Some((mov, i));

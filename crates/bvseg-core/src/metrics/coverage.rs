@@ -2,7 +2,7 @@
 //! volumes are swapped, so that a candidate move is judged without recounting the union.
 use std::collections::HashMap;
 
-use super::Cell;
+use super::{Cell, Cells};
 use crate::partition::Solid;
 
 /// How many volumes cover each lattice cell outside the solid (of both lattices, see
@@ -82,28 +82,13 @@ impl Coverage {
     }
 
     /// Cover `cells` once more.
-    pub fn add(&mut self, cells: &[Cell]) {
-        for c in cells {
-            let was = match self.slot(c) {
-                Some(v) => {
-                    *v += 1;
-                    *v - 1
-                }
-                None => {
-                    let v = self.extra.entry(*c).or_insert(0);
-                    *v += 1;
-                    (*v - 1) as u16
-                }
-            };
-            if was == 0 {
-                self.union += 1;
-            }
-        }
+    pub fn add(&mut self, cells: &Cells) {
+        self.count_each(cells, true);
     }
 
     /// The union after replacing the cells of `old` volumes by those of `new` ones; the
     /// coverage is left as it was.
-    pub fn union_if(&mut self, old: [&[Cell]; 2], new: [&[Cell]; 2]) -> usize {
+    pub fn union_if(&mut self, old: [&Cells; 2], new: [&Cells; 2]) -> usize {
         self.replace(old, new);
         let union = self.union;
         self.replace(new, old);
@@ -111,7 +96,7 @@ impl Coverage {
     }
 
     /// Replace the cells of `old` volumes by those of `new` ones.
-    pub fn replace(&mut self, old: [&[Cell]; 2], new: [&[Cell]; 2]) {
+    pub fn replace(&mut self, old: [&Cells; 2], new: [&Cells; 2]) {
         for c in old {
             self.remove(c);
         }
@@ -121,22 +106,118 @@ impl Coverage {
     }
 
     /// Undo one [`Coverage::add`] of `cells`.
-    pub fn remove(&mut self, cells: &[Cell]) {
-        for c in cells {
-            let now = match self.slot(c) {
-                Some(v) => {
-                    *v -= 1;
-                    *v
+    pub fn remove(&mut self, cells: &Cells) {
+        self.count_each(cells, false);
+    }
+
+    /// Count each cell of `cells` once more (`add`) or once less, keeping
+    /// [`Coverage::union`].
+    fn count_each(&mut self, cells: &Cells, add: bool) {
+        // Whether a count, changed, moved the cell into or out of the union.
+        let change = |v: &mut u16| {
+            if add {
+                *v += 1;
+                *v == 1
+            } else {
+                *v -= 1;
+                *v == 0
+            }
+        };
+        let stride = (self.n[0] * self.n[1]) as usize;
+        let mut moved = 0usize;
+        for &(first, len) in cells.runs() {
+            // A run whose first and last cells are in range lies in the dense array whole
+            // (it goes up the third index).
+            let dense = self
+                .index(&first)
+                .filter(|_| self.index(&first.up(len - 1)).is_some());
+            if let Some((offset, i0)) = dense {
+                let counts = if offset {
+                    &mut self.count_offset
+                } else {
+                    &mut self.count
+                };
+                for d in 0..len as usize {
+                    moved += usize::from(change(&mut counts[i0 + d * stride]));
                 }
-                None => {
-                    let v = self.extra.entry(*c).or_insert(1);
-                    *v -= 1;
-                    *v as u16
+            } else {
+                for d in 0..len {
+                    let c = first.up(d);
+                    moved += usize::from(match self.slot(&c) {
+                        Some(v) => change(v),
+                        None => {
+                            // A cell removed that was never added counts as added once.
+                            let v = self.extra.entry(c).or_insert(u32::from(!add));
+                            if add {
+                                *v += 1;
+                                *v == 1
+                            } else {
+                                *v -= 1;
+                                *v == 0
+                            }
+                        }
+                    });
                 }
-            };
-            if now == 0 {
-                self.union -= 1;
             }
         }
+        if add {
+            self.union += moved;
+        } else {
+            self.union -= moved;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use glam::DVec3;
+
+    use super::*;
+    use crate::sampling::Grid;
+
+    #[test]
+    fn runs_count_as_their_cells_in_and_beyond_the_dense_arrays() {
+        let grid = Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), 0.2, |p| {
+            p.length() < 1.0
+        });
+        let d = grid.dims.map(|x| x as i64);
+        let solid = Solid::new(grid);
+        // Runs inside the arrays, across their upper end, wholly beyond them, on both
+        // lattices, overlapping one another.
+        let lists: Vec<Cells> = (0..4i64)
+            .map(|v| {
+                let mut c = Cells::default();
+                c.push_run(false, [v, 1], [0, d[2] + v]);
+                c.push_run(true, [1, v], [d[2] - 2, 2 * d[2] + 3 * v]);
+                c.push_run(false, [-d[0], v], [5 * d[2], 5 * d[2] + v]);
+                c.push_run(v % 2 == 1, [2, 2], [-3, 3]);
+                c
+            })
+            .collect();
+        let mut cov = Coverage::new(&solid);
+        let mut brute: BTreeMap<Cell, usize> = BTreeMap::new();
+        let distinct = |b: &BTreeMap<Cell, usize>| b.values().filter(|&&n| n > 0).count();
+        for c in &lists {
+            cov.add(c);
+            for x in c.iter() {
+                *brute.entry(x).or_default() += 1;
+            }
+            assert_eq!(cov.union, distinct(&brute));
+        }
+        assert!(brute.keys().all(|x| cov.covered(x)));
+        let before = cov.union;
+        let none = Cells::default();
+        let without = cov.union_if([&lists[0], &lists[3]], [&none, &none]);
+        assert_eq!(cov.union, before, "union_if leaves the coverage as it was");
+        for c in [&lists[0], &lists[3]] {
+            cov.remove(c);
+            for x in c.iter() {
+                *brute.get_mut(&x).unwrap() -= 1;
+            }
+        }
+        assert_eq!((cov.union, without), (distinct(&brute), distinct(&brute)));
+        assert!(brute.iter().all(|(x, &n)| cov.covered(x) == (n > 0)));
     }
 }

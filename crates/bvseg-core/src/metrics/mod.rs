@@ -16,14 +16,14 @@
 //! - `TOV = #(outside cells of both lattices in the union) / (2 n)`
 //! - `OV_i = #(outside cells of both lattices in volume i) / (2 n_i)`, `MOV = max_i OV_i`
 //!
-//! One list holds a volume's outside cells of both lattices, as [`Cell`]s; [`Coverage`] keeps
-//! the union's count as volumes change.
+//! One list holds a volume's outside cells of both lattices, as runs of [`Cell`]s along the
+//! columns ([`Cells`]); [`Coverage`] keeps the union's count as volumes change.
 mod cell;
 mod coverage;
 mod protrusion;
 mod surface;
 
-pub use cell::Cell;
+pub use cell::{Cell, Cells};
 pub use coverage::Coverage;
 pub use protrusion::protrusion_capped;
 pub use surface::SurfaceDistance;
@@ -182,8 +182,8 @@ pub fn for_each_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(i64, i64
     });
 }
 
-/// Call `f(cell)` for every cell of either lattice outside the solid whose centre lies in
-/// `v`.
+/// [`outside_cells_while`] to the end.
+#[cfg(test)]
 pub fn for_each_outside_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(Cell)) {
     outside_cells_while(grid, v, |c| {
         f(c);
@@ -191,8 +191,9 @@ pub fn for_each_outside_cell(grid: &Grid, v: &BoundingVolume, mut f: impl FnMut(
     });
 }
 
-/// Like [`for_each_outside_cell`], stopping after the first column during which `f` returned
-/// `false`. Returns whether every cell was visited.
+/// Call `f(cell)` for every cell of either lattice outside the solid whose centre lies in
+/// `v`, in the order of [`outside_cells`], stopping after the first column during which `f`
+/// returned `false`. Returns whether every cell was visited.
 pub fn outside_cells_while(
     grid: &Grid,
     v: &BoundingVolume,
@@ -201,7 +202,9 @@ pub fn outside_cells_while(
     let mut go = true;
     let [sampling, offset] = &grid.inside_runs;
     let done = columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
-        sampling.for_each_gap([i, j], [k0, k1], |k| go &= f(Cell::sampling([i, j, k])));
+        sampling.for_each_gap([i, j], [k0, k1], |a, b| {
+            (a..=b).for_each(|k| go &= f(Cell::sampling([i, j, k])));
+        });
         go
     });
     if !done {
@@ -209,7 +212,9 @@ pub fn outside_cells_while(
     }
     let origin = grid.origin + DVec3::splat(0.5 * grid.h);
     columns_in(origin, grid.h, v, |i, j, k0, k1| {
-        offset.for_each_gap([i, j], [k0, k1], |k| go &= f(Cell::offset([i, j, k])));
+        offset.for_each_gap([i, j], [k0, k1], |a, b| {
+            (a..=b).for_each(|k| go &= f(Cell::offset([i, j, k])));
+        });
         go
     })
 }
@@ -270,27 +275,37 @@ pub fn outside_count(grid: &Grid, v: &BoundingVolume) -> usize {
     n
 }
 
-/// Cells of both lattices outside the solid whose centres `v` contains (see
-/// [`for_each_outside_cell`]).
-pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Vec<Cell> {
-    // Counted first, so that the lists the fit cache keeps take no more memory than they
-    // hold (a growing vector ends up to twice that).
-    let mut out = Vec::with_capacity(outside_count(grid, v));
-    for_each_outside_cell(grid, v, |c| out.push(c));
+/// Cells of both lattices outside the solid whose centres `v` contains, as runs up the
+/// columns: the gaps between the solid's inside runs within the volume's interval of each
+/// column, the sampling lattice's columns first.
+pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Cells {
+    let mut out = Cells::default();
+    let offset_origin = grid.origin + DVec3::splat(0.5 * grid.h);
+    for (offset, origin, runs) in [
+        (false, grid.origin, &grid.inside_runs[0]),
+        (true, offset_origin, &grid.inside_runs[1]),
+    ] {
+        columns_in(origin, grid.h, v, |i, j, k0, k1| {
+            runs.for_each_gap([i, j], [k0, k1], |a, b| {
+                out.push_run(offset, [i, j], [a, b])
+            });
+            true
+        });
+    }
+    // The fit cache keeps these lists: no more memory than they hold (a growing vector ends
+    // up to twice that).
+    out.shrink_to_fit();
     out
 }
 
 /// TOV, OV and MOV of `volumes`, where volume `i` bounds a part of `counts[i]` samples.
 pub fn outside_volumes(grid: &Grid, volumes: &[BoundingVolume], counts: &[f64]) -> Outside {
-    let per: Vec<Vec<Cell>> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
-    outside_from_cells(
-        &per.iter().map(|c| c.as_slice()).collect::<Vec<_>>(),
-        counts,
-    )
+    let per: Vec<Cells> = crate::parallel::map(volumes, |v| outside_cells(grid, v));
+    outside_from_cells(&per.iter().collect::<Vec<_>>(), counts)
 }
 
 /// TOV, OV and MOV from each volume's outside cells (see [`outside_cells`]).
-pub fn outside_from_cells(per: &[&[Cell]], counts: &[f64]) -> Outside {
+pub fn outside_from_cells(per: &[&Cells], counts: &[f64]) -> Outside {
     let total: f64 = counts.iter().sum();
     let ov: Vec<f64> = per
         .iter()
@@ -308,13 +323,12 @@ pub fn outside_from_cells(per: &[&[Cell]], counts: &[f64]) -> Outside {
 
 /// Number of distinct cells of one lattice (the offset one if `offset`) in `per`, marked in a
 /// bitmap over their bounding box.
-fn distinct(per: &[&[Cell]], offset: bool) -> usize {
+fn distinct(per: &[&Cells], offset: bool) -> usize {
     let cells = || {
         per.iter()
-            .copied()
-            .flatten()
+            .flat_map(|c| c.iter())
             .filter(move |c| c.is_offset() == offset)
-            .map(Cell::index)
+            .map(|c| c.index())
     };
     let mut lo = [i64::MAX; 3];
     let mut hi = [i64::MIN; 3];
@@ -381,9 +395,14 @@ mod tests {
             for s in [0.3, 0.7, 1.0, 1.6] {
                 let mut w = v.clone();
                 w.radii *= s;
+                let cells = outside_cells(&g, &w);
+                assert_eq!(outside_count(&g, &w), cells.len(), "{:?} x {s}", w.shape);
+                // The runs hold the cells the walk visits, in its order.
+                let mut walk = Vec::new();
+                for_each_outside_cell(&g, &w, |c| walk.push(c));
                 assert_eq!(
-                    outside_count(&g, &w),
-                    outside_cells(&g, &w).len(),
+                    cells.iter().collect::<Vec<_>>(),
+                    walk,
                     "{:?} x {s}",
                     w.shape
                 );
@@ -492,7 +511,7 @@ mod tests {
         // in the ball but not in the cube.
         let half = DVec3::splat(0.5 * h);
         let offset_cells: Vec<Cell> = outside_cells(&g, &v)
-            .into_iter()
+            .iter()
             .filter(Cell::is_offset)
             .collect();
         let brute = (c[2] - r..=c[2] + r)

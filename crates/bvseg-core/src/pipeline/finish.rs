@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{Context, State};
-use crate::metrics::{outside_from_cells, outside_volumes, Cell};
+use crate::metrics::{outside_from_cells, outside_volumes, Cells};
 use crate::refine::budget::work_budget;
 use crate::reshaping::reshape;
 use crate::tightening::{relieve_worst, tighten, Passes};
@@ -111,7 +111,7 @@ fn reshaped(ctx: &Context, cur: State) -> State {
             cells[i] = cur.fits[i].outside.clone();
         }
     }
-    let cells: Vec<&[Cell]> = cells.iter().map(Vec::as_slice).collect();
+    let cells: Vec<&Cells> = cells.iter().collect();
     let o = outside_from_cells(&cells, &counts);
     cur.with_volumes(volumes, o)
 }

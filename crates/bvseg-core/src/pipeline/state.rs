@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use super::Context;
 use crate::fitting::Fit;
-use crate::metrics::{outside_from_cells, Cell, Outside};
+use crate::metrics::{outside_from_cells, Cells, Outside};
 use crate::partition::Partition;
 use crate::refine::{Figures, Tolerances};
 use crate::{BoundingVolume, Step, StepKind};
@@ -37,7 +37,7 @@ impl State {
     pub fn measure(part: Partition, fits: Vec<Arc<Fit>>, pr: Vec<f64>) -> Self {
         let counts = part.counts();
         let volumes: Vec<BoundingVolume> = fits.iter().map(|f| f.volume.clone()).collect();
-        let cells: Vec<&[Cell]> = fits.iter().map(|f| f.outside.as_slice()).collect();
+        let cells: Vec<&Cells> = fits.iter().map(|f| &f.outside).collect();
         let o = outside_from_cells(&cells, &counts);
         State {
             f: part.f(),

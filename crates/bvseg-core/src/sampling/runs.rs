@@ -73,13 +73,16 @@ impl InsideRuns {
         n
     }
 
-    /// Call `f(k)` for each `k` in `k0..=k1`, in order, whose cell `(i, j, k)` is not inside
-    /// (every cell beyond the lattice is outside): the gaps between the column's runs, so the
-    /// cost follows the outside cells, not the inside ones.
+    /// Call `f(a, b)` for each maximal range `a..=b` of `k0..=k1`, in order, whose cells
+    /// `(i, j, k)` are not inside (every cell beyond the lattice is outside): the gaps between
+    /// the column's runs, so the cost follows the gaps, not the cells.
     #[inline]
-    pub fn for_each_gap(&self, [i, j]: [i64; 2], [k0, k1]: [i64; 2], mut f: impl FnMut(i64)) {
+    pub fn for_each_gap(&self, [i, j]: [i64; 2], [k0, k1]: [i64; 2], mut f: impl FnMut(i64, i64)) {
+        if k1 < k0 {
+            return;
+        }
         if i < 0 || j < 0 || i >= self.nx as i64 || j >= self.ny as i64 {
-            (k0..=k1).for_each(f);
+            f(k0, k1);
             return;
         }
         let c = i as usize + self.nx * j as usize;
@@ -89,10 +92,14 @@ impl InsideRuns {
             if a > k1 {
                 break;
             }
-            (next..a.min(k1 + 1)).for_each(&mut f);
+            if next < a {
+                f(next, a - 1);
+            }
             next = next.max(b + 1);
         }
-        (next..=k1).for_each(f);
+        if next <= k1 {
+            f(next, k1);
+        }
     }
 }
 
@@ -123,7 +130,13 @@ mod tests {
                             .count();
                         assert_eq!(runs.count([i, j], [k0, k1]), walk, "{i} {j} {k0} {k1}");
                         let mut gaps = Vec::new();
-                        runs.for_each_gap([i, j], [k0, k1], |k| gaps.push(k));
+                        let mut last = i64::MIN;
+                        runs.for_each_gap([i, j], [k0, k1], |a, b| {
+                            // Maximal, ordered, non-empty ranges.
+                            assert!(a <= b && a > last.saturating_add(1), "{a} {b} {last}");
+                            last = b;
+                            gaps.extend(a..=b);
+                        });
                         let outside: Vec<i64> = (k0..=k1)
                             .filter(|&k| {
                                 !((0..5).contains(&i)
