@@ -39,6 +39,16 @@ impl Cell {
         Cell([i + OFFSET_TAG, j, k])
     }
 
+    /// Cell `c` of the offset lattice if `offset`, else of the sampling one.
+    #[inline]
+    pub fn of(offset: bool, c: [i64; 3]) -> Self {
+        if offset {
+            Self::offset(c)
+        } else {
+            Self::sampling(c)
+        }
+    }
+
     /// Whether the cell belongs to the offset lattice.
     #[inline]
     pub fn is_offset(&self) -> bool {
@@ -82,12 +92,7 @@ impl Cells {
         while a <= b {
             // Runs longer than a u32 only for absurd volumes: split them.
             let n = (b - a + 1).min(i64::from(u32::MAX));
-            let start = if offset {
-                Cell::offset([i, j, a])
-            } else {
-                Cell::sampling([i, j, a])
-            };
-            self.runs.push((start, n as u32));
+            self.runs.push((Cell::of(offset, [i, j, a]), n as u32));
             self.len += n as usize;
             a += n;
         }

@@ -113,16 +113,6 @@ impl Coverage {
     /// Count each cell of `cells` once more (`add`) or once less, keeping
     /// [`Coverage::union`].
     fn count_each(&mut self, cells: &Cells, add: bool) {
-        // Whether a count, changed, moved the cell into or out of the union.
-        let change = |v: &mut u16| {
-            if add {
-                *v += 1;
-                *v == 1
-            } else {
-                *v -= 1;
-                *v == 0
-            }
-        };
         let stride = (self.n[0] * self.n[1]) as usize;
         let mut moved = 0usize;
         for &(first, len) in cells.runs() {
@@ -138,24 +128,15 @@ impl Coverage {
                     &mut self.count
                 };
                 for d in 0..len as usize {
-                    moved += usize::from(change(&mut counts[i0 + d * stride]));
+                    moved += usize::from(count(&mut counts[i0 + d * stride], add));
                 }
             } else {
                 for d in 0..len {
                     let c = first.up(d);
                     moved += usize::from(match self.slot(&c) {
-                        Some(v) => change(v),
-                        None => {
-                            // A cell removed that was never added counts as added once.
-                            let v = self.extra.entry(c).or_insert(u32::from(!add));
-                            if add {
-                                *v += 1;
-                                *v == 1
-                            } else {
-                                *v -= 1;
-                                *v == 0
-                            }
-                        }
+                        Some(v) => count(v, add),
+                        // A cell removed that was never added counts as added once.
+                        None => count(self.extra.entry(c).or_insert(u32::from(!add)), add),
                     });
                 }
             }
@@ -165,6 +146,22 @@ impl Coverage {
         } else {
             self.union -= moved;
         }
+    }
+}
+
+/// Count a cell once more (`add`) or once less; whether that moved it into or out of the
+/// union.
+#[inline]
+fn count<T>(v: &mut T, add: bool) -> bool
+where
+    T: Copy + PartialEq + From<u8> + std::ops::AddAssign + std::ops::SubAssign,
+{
+    if add {
+        *v += T::from(1);
+        *v == T::from(1)
+    } else {
+        *v -= T::from(1);
+        *v == T::from(0)
     }
 }
 

@@ -31,7 +31,7 @@ pub use surface::SurfaceDistance;
 use glam::DVec3;
 
 use crate::math::{ceil_i64, floor_i64};
-use crate::sampling::Grid;
+use crate::sampling::{Grid, InsideRuns};
 use crate::volume::{BoundingVolume, PlanesAlong, Shape};
 
 /// Outside-volume figures of a set of volumes.
@@ -200,23 +200,28 @@ pub fn outside_cells_while(
     mut f: impl FnMut(Cell) -> bool,
 ) -> bool {
     let mut go = true;
-    let [sampling, offset] = &grid.inside_runs;
-    let done = columns_in(grid.origin, grid.h, v, |i, j, k0, k1| {
-        sampling.for_each_gap([i, j], [k0, k1], |a, b| {
-            (a..=b).for_each(|k| go &= f(Cell::sampling([i, j, k])));
+    for (offset, origin, runs) in lattices(grid) {
+        let done = columns_in(origin, grid.h, v, |i, j, k0, k1| {
+            runs.for_each_gap([i, j], [k0, k1], |a, b| {
+                (a..=b).for_each(|k| go &= f(Cell::of(offset, [i, j, k])));
+            });
+            go
         });
-        go
-    });
-    if !done {
-        return false;
+        if !done {
+            return false;
+        }
     }
-    let origin = grid.origin + DVec3::splat(0.5 * grid.h);
-    columns_in(origin, grid.h, v, |i, j, k0, k1| {
-        offset.for_each_gap([i, j], [k0, k1], |a, b| {
-            (a..=b).for_each(|k| go &= f(Cell::offset([i, j, k])));
-        });
-        go
-    })
+    true
+}
+
+/// The two lattices outside volumes are counted on (see the module docs), the sampling one
+/// first: whether it is the offset one, its origin, and the solid's inside runs on it.
+fn lattices(grid: &Grid) -> [(bool, DVec3, &InsideRuns); 2] {
+    let [sampling, offset] = &grid.inside_runs;
+    [
+        (false, grid.origin, sampling),
+        (true, grid.origin + DVec3::splat(0.5 * grid.h), offset),
+    ]
 }
 
 /// Call `f(i, j, k0, k1)` for every column `(i, j)` of the lattice `origin + h (i, j, k)` that
@@ -261,12 +266,8 @@ fn columns_in(
 /// Number of cells of both lattices outside the solid whose centres `v` contains: the
 /// length of [`outside_cells`], counted per column from the solid's runs.
 pub fn outside_count(grid: &Grid, v: &BoundingVolume) -> usize {
-    let offset_origin = grid.origin + DVec3::splat(0.5 * grid.h);
     let mut n = 0;
-    for (origin, runs) in [
-        (grid.origin, &grid.inside_runs[0]),
-        (offset_origin, &grid.inside_runs[1]),
-    ] {
+    for (_, origin, runs) in lattices(grid) {
         columns_in(origin, grid.h, v, |i, j, k0, k1| {
             n += (k1 - k0 + 1) as usize - runs.count([i, j], [k0, k1]);
             true
@@ -280,11 +281,7 @@ pub fn outside_count(grid: &Grid, v: &BoundingVolume) -> usize {
 /// column, the sampling lattice's columns first.
 pub fn outside_cells(grid: &Grid, v: &BoundingVolume) -> Cells {
     let mut out = Cells::default();
-    let offset_origin = grid.origin + DVec3::splat(0.5 * grid.h);
-    for (offset, origin, runs) in [
-        (false, grid.origin, &grid.inside_runs[0]),
-        (true, offset_origin, &grid.inside_runs[1]),
-    ] {
+    for (offset, origin, runs) in lattices(grid) {
         columns_in(origin, grid.h, v, |i, j, k0, k1| {
             runs.for_each_gap([i, j], [k0, k1], |a, b| {
                 out.push_run(offset, [i, j], [a, b])
