@@ -7,8 +7,16 @@
 #      dependencies is not on the registry);
 #   3. wasm-opt from npm's binaryen package optimises the module (Debian's binaryen 108 makes a
 #      module that fails to load);
-#   4. the page (index.html, main.js) is copied next to it.
-# Serve web/dist/ with any static server, e.g. `python3 -m http.server -d web/dist`.
+#   4. the page (index.html, main.js) is copied next to it;
+#   5. the same again with threads (the `threads` feature) into web/dist/threads/: the core on
+#      a pool of Web Workers (wasm-bindgen-rayon). The standard library must be rebuilt with
+#      WebAssembly atomics for that, which takes a nightly toolchain with rust-src (rustup
+#      adds them); without one the page is built without threads, with a warning
+#      (BVSEG_WEB_THREADS=0 skips it, =1 makes it an error).
+# Serve web/dist/ with any static server, e.g. `python3 -m http.server -d web/dist`. The page
+# runs the threaded module only when served cross-origin isolated, that is with the headers
+# `Cross-Origin-Opener-Policy: same-origin` and `Cross-Origin-Embedder-Policy: require-corp`
+# (browsers allow shared memory only then); otherwise the one without threads.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -45,6 +53,38 @@ CARGO_PROFILE_RELEASE_DEBUG=0 \
     cargo build --release --target wasm32-unknown-unknown -p bvseg-viewer --lib "${size_config[@]}"
 wasm="target/wasm32-unknown-unknown/release/bvseg_viewer.wasm"
 
+# The threaded module, from its own target directory (another toolchain, another std).
+threads=${BVSEG_WEB_THREADS:-auto}
+nightly=${BVSEG_NIGHTLY:-nightly}
+threads_wasm=""
+# Atomics in every crate, std included (build-std), and a shared memory that the JS glue
+# creates and hands to each worker (imported), with the thread-local storage exports that
+# wasm-bindgen's thread support calls.
+threads_flags="-C target-feature=+simd128,+atomics,+bulk-memory,+mutable-globals"
+for arg in --shared-memory --import-memory --max-memory=1073741824 --export=__wasm_init_tls \
+    --export=__tls_size --export=__tls_align --export=__tls_base; do
+    threads_flags+=" -C link-arg=$arg"
+done
+if [ "$threads" != 0 ]; then
+    say "cargo +$nightly build --features threads (WebAssembly threads)"
+    if command -v rustup >/dev/null 2>&1 &&
+        rustup component add rust-src --toolchain "$nightly" &&
+        rustup target add wasm32-unknown-unknown --toolchain "$nightly" &&
+        CARGO_PROFILE_RELEASE_DEBUG=0 \
+            CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="$threads_flags" \
+            cargo "+$nightly" build --release --target wasm32-unknown-unknown -p bvseg-viewer \
+            --lib --features threads -Z build-std=panic_abort,std --target-dir target/wasm-threads \
+            "${size_config[@]}"; then
+        threads_wasm="target/wasm-threads/wasm32-unknown-unknown/release/bvseg_viewer.wasm"
+    elif [ "$threads" = 1 ]; then
+        echo "build.sh: error: the threaded module did not build (BVSEG_WEB_THREADS=1)" >&2
+        exit 1
+    else
+        echo "build.sh: warning: no threaded module (needs rustup's $nightly with rust-src):" \
+            "the page will run the core on one thread" >&2
+    fi
+fi
+
 say "wasm-bindgen $version"
 cargo_bin="${CARGO_HOME:-$HOME/.cargo}/bin"
 export PATH="$cargo_bin:$PATH"
@@ -55,20 +95,29 @@ rm -rf "$dist"
 mkdir -p "$dist"
 wasm-bindgen "$wasm" --out-dir "$dist" --out-name bvseg_viewer --target web --no-typescript \
     --remove-name-section --remove-producers-section
+if [ -n "$threads_wasm" ]; then
+    wasm-bindgen "$threads_wasm" --out-dir "$dist/threads" --out-name bvseg_viewer --target web \
+        --no-typescript --remove-name-section --remove-producers-section
+fi
 
 say "wasm-opt (npm binaryen)"
 (cd web && npm ci --no-audit --no-fund --loglevel=error)
-raw_size=$(stat -c %s "$dist/bvseg_viewer_bg.wasm")
 # -O3, not -Oz: the module is well within its size budget, and speed is what the page needs.
-web/node_modules/.bin/wasm-opt -O3 \
-    --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-    --enable-mutable-globals --enable-reference-types --enable-multivalue --enable-simd \
-    "$dist/bvseg_viewer_bg.wasm" -o "$dist/bvseg_viewer_bg.wasm"
-size=$(stat -c %s "$dist/bvseg_viewer_bg.wasm")
+# The threaded module also needs `--enable-threads` (shared memory, atomics).
+for module in "$dist/bvseg_viewer_bg.wasm" ${threads_wasm:+"$dist/threads/bvseg_viewer_bg.wasm"}; do
+    raw_size=$(stat -c %s "$module")
+    extra=()
+    if [[ "$module" == */threads/* ]]; then extra=(--enable-threads); fi
+    web/node_modules/.bin/wasm-opt -O3 \
+        --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+        --enable-mutable-globals --enable-reference-types --enable-multivalue --enable-simd \
+        "${extra[@]}" "$module" -o "$module"
+    size=$(stat -c %s "$module")
+    say "$module: $size bytes (before wasm-opt: $raw_size; budget: 6,000,000)"
+    if [ "$size" -gt 6000000 ]; then
+        echo "build.sh: error: the optimised module is over 6 MB" >&2
+        exit 1
+    fi
+done
 
 cp web/index.html web/main.js "$dist/"
-say "web/dist/bvseg_viewer_bg.wasm: $size bytes (before wasm-opt: $raw_size; budget: 6,000,000)"
-if [ "$size" -gt 6000000 ]; then
-    echo "build.sh: error: the optimised module is over 6 MB" >&2
-    exit 1
-fi

@@ -28,25 +28,43 @@ const TYPES = {
   '.wasm': 'application/wasm',
 };
 
-let server;
+// The page runs the core on threads only when served cross-origin isolated (web/build.sh).
+const ISOLATED = {
+  'cross-origin-opener-policy': 'same-origin',
+  'cross-origin-embedder-policy': 'require-corp',
+};
+// Whether web/build.sh made the threaded module (it warns when it could not).
+const THREADED = existsSync(join(dist, 'threads', 'bvseg_viewer_bg.wasm'));
+
+let servers = [];
+// The page served cross-origin isolated, as it should be, and served plainly.
 let base;
+let plainBase;
 let context;
 let profile;
 
-before(async () => {
-  assert.ok(existsSync(join(dist, 'index.html')), 'web/dist is missing: run web/build.sh first');
-  server = createServer((req, res) => {
+/** A static server of web/dist on 127.0.0.1 sending `headers` with every file; its origin. */
+async function serve(headers) {
+  const server = createServer((req, res) => {
     const path = normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname));
     const file = join(dist, path === '/' ? 'index.html' : path);
     if (!file.startsWith(dist) || !existsSync(file)) {
       res.writeHead(404).end();
       return;
     }
-    res.writeHead(200, { 'content-type': TYPES[extname(file)] || 'application/octet-stream' });
+    res.writeHead(200, { 'content-type': TYPES[extname(file)] || 'application/octet-stream', ...headers });
     res.end(readFileSync(file));
   });
   await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
-  base = `http://127.0.0.1:${server.address().port}`;
+  servers.push(server);
+  return `http://127.0.0.1:${server.address().port}`;
+}
+
+before(async () => {
+  assert.ok(existsSync(join(dist, 'index.html')), 'web/dist is missing: run web/build.sh first');
+  console.log(`# threaded module: ${THREADED ? 'built' : 'absent (web/build.sh warned why)'}`);
+  base = await serve(ISOLATED);
+  plainBase = await serve({});
   profile = mkdtempSync(join(tmpdir(), 'bvseg-chromium-'));
   // Playwright adds --headless itself (headless: true); the rest keeps Chromium off the
   // network and lets WebGL2 run on SwiftShader without a GPU.
@@ -69,18 +87,19 @@ before(async () => {
 
 after(async () => {
   await context?.close();
-  server?.close();
+  for (const server of servers) server.close();
   if (profile) rmSync(profile, { recursive: true, force: true });
 });
 
-/** Opens the page with `query` and waits for the end of the run; returns title and JSON text. */
-async function runPage(query) {
+/** Opens the page with `query` (from `origin`) and waits for the end of the run; returns title,
+ * JSON text, and the threads the core ran on. */
+async function runPage(query, origin = base) {
   const page = await context.newPage();
   const logs = [];
   page.on('console', (m) => logs.push(`${m.type()}: ${m.text()}`));
   page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
   const t0 = Date.now();
-  await page.goto(`${base}/index.html?${query}`);
+  await page.goto(`${origin}/index.html?${query}`);
   try {
     await page.waitForFunction(
       () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
@@ -93,7 +112,13 @@ async function runPage(query) {
   const seconds = (Date.now() - t0) / 1000;
   const title = await page.title();
   const text = await page.locator('#bvseg-result').textContent();
-  return { page, title, text, seconds, logs };
+  const [threads, cores] = await page.evaluate(() => [window.bvseg?.threads, navigator.hardwareConcurrency]);
+  return { page, title, text, seconds, logs, threads, cores };
+}
+
+/** The threads the page should have run the core on, served from `origin`. */
+function expectedThreads(origin, cores) {
+  return origin === base && THREADED ? cores : 1;
 }
 
 /** Clicks the widget the app says it drew under `label` (eframe's web backend has no
@@ -182,8 +207,9 @@ function pixelStats(img, [x0, y0, w, h]) {
 }
 
 test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async () => {
-  const { page, title, text, seconds, logs } = await runPage(`mesh=${MESH}&autorun=1`);
+  const { page, title, text, seconds, logs, threads, cores } = await runPage(`mesh=${MESH}&autorun=1`);
   assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
+  assert.equal(threads, expectedThreads(base, cores), logs.join('\n'));
   const r = JSON.parse(text);
   for (const key of ['tov', 'mov', 'f', 'protrusion', 'protrusion_rel']) {
     assert.ok(Number.isFinite(r[key]), `${key} = ${r[key]}`);
@@ -194,7 +220,7 @@ test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async 
   console.log(
     `# ${MESH}: k=${r.k} TOV=${r.tov.toFixed(4)} protrusion=${r.protrusion_rel.toFixed(4)} of the diagonal ` +
       `MOV=${r.mov.toFixed(4)} F=${r.f.toFixed(4)} samples=${r.samples}; tolerances (TOV 0.3, protrusion 0.05) met: ${r.met}; run ${r.time_s.toFixed(2)} s ` +
-      `in the page (bar 2 s; ${r.core_s.toFixed(2)} s of it in the core, the rest drawing ${r.frames} frames), ` +
+      `in the page on ${threads} thread(s) (bar 2 s; ${r.core_s.toFixed(2)} s of it in the core, ${r.frames} frames), ` +
       `${seconds.toFixed(2)} s from navigation`,
   );
 
@@ -213,22 +239,25 @@ test(`?mesh=${MESH}&autorun=1 segments in the page and draws the result`, async 
   await page.close();
 });
 
-test(`the page's JSON for ${MESH} is byte-identical to the CLI's`, async () => {
-  const cli = join(here, 'cli-json', `${MESH}.json`);
-  assert.ok(existsSync(cli), `${cli} is missing: web/test.sh writes it with the CLI`);
-  const { page, title, logs } = await runPage(`mesh=${MESH}&autorun=1`);
-  assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
-  const click = (label) => clickWidget(page, label);
-  await click('Result');
-  const download = page.waitForEvent('download', { timeout: 10_000 });
-  await click('Download JSON');
-  const file = await (await download).path();
-  const fromPage = readFileSync(file);
-  const fromCli = readFileSync(cli);
-  assert.ok(fromPage.equals(fromCli), `the page's ${fromPage.length} bytes differ from the CLI's ${fromCli.length}`);
-  console.log(`# ${MESH}: the page's volumes JSON equals the CLI's, ${fromCli.length} bytes`);
-  await page.close();
-});
+for (const [served, origin] of [['cross-origin isolated', () => base], ['plainly', () => plainBase]]) {
+  test(`the page's JSON for ${MESH}, served ${served}, is byte-identical to the CLI's`, async () => {
+    const cli = join(here, 'cli-json', `${MESH}.json`);
+    assert.ok(existsSync(cli), `${cli} is missing: web/test.sh writes it with the CLI`);
+    const { page, title, logs, threads, cores } = await runPage(`mesh=${MESH}&autorun=1`, origin());
+    assert.ok(title.startsWith('bvseg: done'), `title "${title}"\n${logs.join('\n')}`);
+    assert.equal(threads, expectedThreads(origin(), cores), logs.join('\n'));
+    const click = (label) => clickWidget(page, label);
+    await click('Result');
+    const download = page.waitForEvent('download', { timeout: 10_000 });
+    await click('Download JSON');
+    const file = await (await download).path();
+    const fromPage = readFileSync(file);
+    const fromCli = readFileSync(cli);
+    assert.ok(fromPage.equals(fromCli), `the page's ${fromPage.length} bytes differ from the CLI's ${fromCli.length}`);
+    console.log(`# ${MESH}, served ${served}, on ${threads} thread(s): the page's volumes JSON equals the CLI's, ${fromCli.length} bytes`);
+    await page.close();
+  });
+}
 
 test('clicking the controls in the page runs with them', async () => {
   const page = await context.newPage();

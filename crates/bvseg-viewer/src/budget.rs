@@ -1,4 +1,5 @@
-//! How much core work a frame may do during a run.
+//! How much core work a frame may do during a run (and, for a run in the background, how
+//! often a frame looks at it).
 //!
 //! Drawing a frame costs little on a GPU but a lot in a software renderer (a browser without
 //! GPU draws WebGL on the CPU, on the same cores as the core). A fixed budget would let the
@@ -14,6 +15,13 @@ pub const MAX_BUDGET: Duration = Duration::from_millis(300);
 /// Core work per unit of frame overhead. At 4 (and 200 ms at most), the page's run of the
 /// bundled `fourleg_2` spent 1.1 s of its 6.7 s drawing 11 frames in a software renderer.
 pub const RATIO: u32 = 8;
+
+/// How often a frame takes the news of a run in the background (the page's threaded build),
+/// which needs no frames of its own. A frame that shows news costs the drawing of two or
+/// three (egui lays out again the panels that changed): taking news every frame, the page's
+/// run of `spot` drew 14 to 19 frames and its core shared the machine with the drawing; at
+/// 500 ms it draws 8, as many as a stepped run.
+pub const NEWS_INTERVAL: Duration = Duration::from_millis(500);
 
 /// The budget for a frame whose drawing and event handling take `overhead`.
 pub fn budget_for(overhead: Duration) -> Duration {

@@ -1,12 +1,13 @@
 //! # bvseg-viewer
 //!
 //! An interactive viewer for bvseg, one eframe app for the desktop and the browser. It runs
-//! the real core ([`bvseg_core::Segmenter`]) a bounded amount per frame, so the view follows
-//! the refinement live and the UI never freezes, even in a page without threads.
+//! the real core ([`bvseg_core::Segmenter`]) a bounded amount per frame, or in the background
+//! in the page's threaded build (feature `threads`), so the view follows the refinement live
+//! and the UI never freezes, even in a page without threads.
 //!
 //! - [`app`]: the [`ViewerApp`] (panels, controls, input and output).
-//! - [`session`]: one segmentation run, stepped under a time budget, with its history;
-//!   [`budget`] sizes each frame's share of the work.
+//! - [`session`]: one segmentation run, stepped under a time budget or run in the background,
+//!   with its history; [`budget`] sizes each frame's share of the work.
 //! - [`meshes`]: the bundled sample meshes and the one function that turns file bytes into a mesh.
 //! - [`scene`], [`camera`], [`render`]: the 3D view (CPU geometry, orbit camera, glow renderer).
 //! - [`kinds`]: the volume kinds a run may use (the controls' presets, names, part sizes).

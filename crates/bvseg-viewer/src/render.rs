@@ -37,6 +37,14 @@ pub struct Renderer {
     uploaded: Option<u64>,
 }
 
+// SAFETY: egui's paint callbacks, which own the renderer, must be `Send`. In the page's threaded
+// build (`threads`, WebAssembly atomics) wasm-bindgen's handles to WebGL objects are not, as a
+// handle is only valid on the thread that made it. The renderer is made and used only inside
+// those callbacks, which eframe runs on the page's main thread, the one owning the WebGL
+// context; no other thread ever touches it (the core's Web Workers get none of the app's state).
+#[cfg(all(target_arch = "wasm32", target_feature = "atomics"))]
+unsafe impl Send for Renderer {}
+
 const VERTEX_SHADER: &str = r#"
 uniform mat4 u_mvp;
 in vec3 a_pos;

@@ -1,12 +1,19 @@
 //! One segmentation run, advanced a bounded amount at a time.
 //!
-//! The browser has no threads, so the run cannot go off to a worker: [`Session::advance`] does
-//! whole core steps until a time budget is spent and then returns, and the app calls it once
-//! per frame. Cancelling is dropping the session. Every step leaves a [`Snapshot`], so the
-//! history can be stepped back through after (and during) the run.
-use std::sync::Arc;
+//! The app calls [`Session::advance`] once per frame. A run goes one of two ways:
+//! - **stepped** (natively, and in the page without threads): `advance` does whole core steps
+//!   on the caller's thread until a time budget is spent, then returns;
+//! - **in the background** (the page's threaded build, `threads`): the whole run goes to
+//!   rayon's pool (Web Workers) at once, and `advance` only collects what it has done so far,
+//!   without ever waiting: a page's main thread may not.
+//!
+//! Cancelling is dropping the session. Every step leaves a [`Snapshot`], so the history can be
+//! stepped back through after (and during) the run.
+use std::sync::{Arc, Mutex};
 
-use bvseg_core::{BoundingVolume, Error, Mesh, Params, Segmentation, Segmenter, Step, StepKind};
+use bvseg_core::{
+    BoundingVolume, Cancel, Error, Mesh, Params, Segmentation, Segmenter, Step, StepKind,
+};
 use web_time::{Duration, Instant};
 
 /// Part label of a triangle whose part is not known (drawn in the plain mesh colour).
@@ -35,12 +42,41 @@ enum Stage {
     Sampling,
     /// Stepping.
     Stepping(Box<Segmenter>),
+    /// Running on the pool; what it did so far waits in the inbox. (Never, in the page
+    /// without threads.)
+    #[cfg_attr(
+        all(target_arch = "wasm32", not(feature = "threads")),
+        allow(dead_code)
+    )]
+    Background(Arc<Inbox>),
     /// Finished; the segmenter is kept, until asked for, to build the hierarchy the run went
     /// without (see [`Session::result_with_hierarchy`]).
     Done(Box<Segmentation>, Option<Box<Segmenter>>),
     /// The core refused the input.
     Failed(Error),
 }
+
+/// What a run in the background hands over, and how to stop it.
+#[derive(Default)]
+struct Inbox {
+    cancel: Cancel,
+    mail: Mutex<Mail>,
+}
+
+/// The background run's news since the last collection.
+#[derive(Default)]
+struct Mail {
+    samples: usize,
+    snapshots: Vec<Snapshot>,
+    /// Time spent in the core so far.
+    busy: Duration,
+    /// How the run ended, and when.
+    end: Option<(Ending, Instant)>,
+}
+
+/// A run's result and the segmenter that made it (kept to build the hierarchy later), or the
+/// core's error.
+type Ending = Result<(Segmentation, Segmenter), Error>;
 
 /// A run of the core on one mesh with one set of parameters.
 pub struct Session {
@@ -71,8 +107,22 @@ pub enum Progress {
 }
 
 impl Session {
-    /// A run that has not started; [`Session::advance`] does the work.
+    /// A run in the way this build runs them: in the background in the page's threaded
+    /// build (see the module docs).
+    #[cfg(feature = "threads")]
     pub fn new(mesh: Arc<Mesh>, params: Params) -> Self {
+        Self::in_background(mesh, params)
+    }
+
+    /// A run in the way this build runs them: stepped, as the build has no `threads` (see
+    /// the module docs).
+    #[cfg(not(feature = "threads"))]
+    pub fn new(mesh: Arc<Mesh>, params: Params) -> Self {
+        Self::stepped(mesh, params)
+    }
+
+    /// A run that has not started; [`Session::advance`] does the work, a step at a time.
+    pub fn stepped(mesh: Arc<Mesh>, params: Params) -> Self {
         let (lo, hi) = mesh.bbox();
         Self {
             diagonal: (hi - lo).length(),
@@ -88,10 +138,26 @@ impl Session {
         }
     }
 
-    /// Do at least one unit of work (sampling, or one core step), and more while `budget` lasts.
+    /// A run started at once on rayon's pool; [`Session::advance`] collects its steps.
+    #[cfg(any(feature = "threads", not(target_arch = "wasm32")))]
+    pub fn in_background(mesh: Arc<Mesh>, params: Params) -> Self {
+        let inbox = Arc::new(Inbox::default());
+        let mut s = Self::stepped(mesh.clone(), params.clone());
+        s.stage = Stage::Background(inbox.clone());
+        rayon::spawn(move || run_in_background(&mesh, &params, &inbox));
+        s
+    }
+
+    /// Stepped: do at least one unit of work (sampling, or one core step), and more while
+    /// `budget` lasts. In the background: take what the run did since the last call, if it
+    /// can be had without waiting (`budget` is not used).
     pub fn advance(&mut self, budget: Duration) -> Progress {
         let t0 = Instant::now();
         self.calls += 1;
+        if let Stage::Background(inbox) = &self.stage {
+            let inbox = inbox.clone();
+            return self.collect(&inbox);
+        }
         loop {
             let p = self.advance_one();
             if p != Progress::Running || t0.elapsed() >= budget {
@@ -131,30 +197,11 @@ impl Session {
                     else {
                         unreachable!("matched above");
                     };
-                    let result = match seg.take_result() {
-                        Ok(r) => r,
-                        Err(e) => {
-                            self.stage = Stage::Failed(e);
-                            return Progress::Failed;
-                        }
-                    };
-                    if let Some(last) = self.snapshots.last_mut() {
-                        if last.step.kind == StepKind::Final {
-                            // The final colouring: the part whose volume encloses each triangle.
-                            last.triangle_parts = Arc::new(
-                                result
-                                    .triangle_parts
-                                    .iter()
-                                    .map(|&p| u16::try_from(p).unwrap_or(UNKNOWN_PART))
-                                    .collect(),
-                            );
-                        }
-                    }
-                    let keep = (!self.params.hierarchy).then_some(seg);
-                    self.stage = Stage::Done(Box::new(result), keep);
-                    Progress::Done
+                    let result = seg.take_result().map(|r| (r, *seg));
+                    self.end(result)
                 }
             },
+            Stage::Background(_) => unreachable!("advance collects a background run"),
             Stage::Done(..) => Progress::Done,
             Stage::Failed(_) => Progress::Failed,
         }
@@ -164,40 +211,54 @@ impl Session {
         let Stage::Stepping(seg) = &self.stage else {
             unreachable!("snapshots are taken while stepping");
         };
-        // A backtrack leaves the current state as it was: share the previous snapshot's data.
-        if step.kind == StepKind::Backtrack {
-            if let Some(prev) = self.snapshots.last() {
-                return Snapshot {
-                    step,
-                    ..prev.clone()
-                };
-            }
-        }
-        let labels = seg.labels();
-        let volumes = seg.volumes().to_vec();
-        let mut counts = vec![0usize; volumes.len()];
-        for &l in labels {
-            if let Some(c) = counts.get_mut(l as usize) {
-                *c += 1;
-            }
-        }
-        let n = labels.len().max(1) as f64;
-        // The core's own rule (each triangle goes with its nearest sample), so that the colours
-        // during the run are those of the result.
-        let triangle_parts = if self.mesh.triangles().len() <= MAX_SNAPSHOT_TRIANGLES {
-            seg.triangle_parts()
-                .into_iter()
-                .map(|l| u16::try_from(l).unwrap_or(UNKNOWN_PART))
-                .collect()
-        } else {
-            Vec::new()
+        snapshot(seg, &self.mesh, step, self.snapshots.last())
+    }
+
+    /// Take the background run's news without waiting (the main thread of a page may not).
+    fn collect(&mut self, inbox: &Inbox) -> Progress {
+        let Ok(mut mail) = inbox.mail.try_lock() else {
+            return Progress::Running;
         };
-        Snapshot {
-            step,
-            volumes: Arc::new(volumes),
-            triangle_parts: Arc::new(triangle_parts),
-            fractions: Arc::new(counts.iter().map(|&c| c as f64 / n).collect()),
+        self.samples = mail.samples;
+        self.busy = mail.busy;
+        self.snapshots.append(&mut mail.snapshots);
+        let Some((result, at)) = mail.end.take() else {
+            return Progress::Running;
+        };
+        drop(mail);
+        self.wall = Some(at.saturating_duration_since(self.started));
+        self.end(result)
+    }
+
+    /// The run has ended with `result` (and the segmenter that made it).
+    fn end(&mut self, result: Ending) -> Progress {
+        let (result, seg) = match result {
+            Ok(r) => r,
+            Err(e) => {
+                self.stage = Stage::Failed(e);
+                return Progress::Failed;
+            }
+        };
+        if let Some(last) = self.snapshots.last_mut() {
+            if last.step.kind == StepKind::Final {
+                // The final colouring: the part whose volume encloses each triangle.
+                last.triangle_parts = Arc::new(
+                    result
+                        .triangle_parts
+                        .iter()
+                        .map(|&p| u16::try_from(p).unwrap_or(UNKNOWN_PART))
+                        .collect(),
+                );
+            }
         }
+        let keep = (!self.params.hierarchy).then(|| Box::new(seg));
+        self.stage = Stage::Done(Box::new(result), keep);
+        Progress::Done
+    }
+
+    /// Whether the run is going on in the background (see the module docs).
+    pub fn is_background(&self) -> bool {
+        matches!(self.stage, Stage::Background(_))
     }
 
     /// The mesh being segmented.
@@ -274,6 +335,81 @@ impl Session {
     }
 }
 
+impl Drop for Session {
+    /// A run in the background stops at its next step.
+    fn drop(&mut self) {
+        if let Stage::Background(inbox) = &self.stage {
+            inbox.cancel.cancel();
+        }
+    }
+}
+
+/// The state of `seg` after `step`; `prev` is the snapshot before it.
+fn snapshot(seg: &Segmenter, mesh: &Mesh, step: Step, prev: Option<&Snapshot>) -> Snapshot {
+    // A backtrack leaves the current state as it was: share the previous snapshot's data.
+    if step.kind == StepKind::Backtrack {
+        if let Some(prev) = prev {
+            return Snapshot {
+                step,
+                ..prev.clone()
+            };
+        }
+    }
+    let labels = seg.labels();
+    let volumes = seg.volumes().to_vec();
+    let mut counts = vec![0usize; volumes.len()];
+    for &l in labels {
+        if let Some(c) = counts.get_mut(l as usize) {
+            *c += 1;
+        }
+    }
+    let n = labels.len().max(1) as f64;
+    // The core's own rule (each triangle goes with its nearest sample), so that the colours
+    // during the run are those of the result.
+    let triangle_parts = if mesh.triangles().len() <= MAX_SNAPSHOT_TRIANGLES {
+        seg.triangle_parts()
+            .into_iter()
+            .map(|l| u16::try_from(l).unwrap_or(UNKNOWN_PART))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    Snapshot {
+        step,
+        volumes: Arc::new(volumes),
+        triangle_parts: Arc::new(triangle_parts),
+        fractions: Arc::new(counts.iter().map(|&c| c as f64 / n).collect()),
+    }
+}
+
+/// The whole run, on a thread of rayon's pool, posting each step to `inbox`.
+#[cfg(any(feature = "threads", not(target_arch = "wasm32")))]
+fn run_in_background(mesh: &Mesh, params: &Params, inbox: &Inbox) {
+    let t0 = Instant::now();
+    // The pool's threads may wait for the lock (only the main thread may not).
+    let post = |f: &mut dyn FnMut(&mut Mail)| {
+        let mut mail = inbox
+            .mail
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        mail.busy = t0.elapsed();
+        f(&mut mail);
+    };
+    let mut seg = match Segmenter::with_cancel(mesh, params, inbox.cancel.clone()) {
+        Ok(seg) => seg,
+        Err(e) => return post(&mut |m| m.end = Some((Err(e.clone()), Instant::now()))),
+    };
+    post(&mut |m| m.samples = seg.samples());
+    let mut last: Option<Snapshot> = None;
+    while let Some(step) = seg.step() {
+        let snap = snapshot(&seg, mesh, step, last.as_ref());
+        last = Some(snap.clone());
+        post(&mut |m| m.snapshots.push(snap.clone()));
+    }
+    let mut end = Some(seg.take_result().map(|r| (r, seg)));
+    post(&mut |m| m.end = end.take().map(|e| (e, Instant::now())));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -309,6 +445,77 @@ mod tests {
         // Stepping gives what the one-call API gives.
         let direct = bvseg_core::segment(&mesh, &params).unwrap();
         assert_eq!(direct.metrics, res.metrics);
+    }
+
+    /// Collects a background run until it ends (natively the caller may wait in between).
+    fn collect_all(s: &mut Session) -> Progress {
+        for _ in 0..60_000 {
+            match s.advance(Duration::ZERO) {
+                Progress::Running => std::thread::sleep(Duration::from_millis(1)),
+                p => return p,
+            }
+        }
+        panic!("the background run did not end");
+    }
+
+    #[test]
+    fn a_run_in_the_background_gives_the_stepped_runs_steps_and_result() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 3000,
+            max_k: 8,
+            hierarchy: false,
+            ..Params::default()
+        };
+        let mut stepped = Session::stepped(mesh.clone(), params.clone());
+        while stepped.advance(Duration::ZERO) == Progress::Running {}
+        let mut bg = Session::in_background(mesh, params);
+        assert!(bg.is_background());
+        assert_eq!(collect_all(&mut bg), Progress::Done);
+        assert!(bg.result().is_some() && bg.result() == stepped.result());
+        assert_eq!(bg.samples(), stepped.samples());
+        let steps = |s: &Session| -> Vec<Step> { s.snapshots().iter().map(|x| x.step).collect() };
+        assert!(steps(&bg).len() > 2);
+        assert_eq!(steps(&bg), steps(&stepped));
+        for (a, b) in bg.snapshots().iter().zip(stepped.snapshots()) {
+            assert_eq!(a.volumes, b.volumes);
+            assert_eq!(a.triangle_parts, b.triangle_parts);
+        }
+        assert!(bg.busy() > Duration::ZERO && bg.busy() <= bg.wall());
+        // The hierarchy it went without is built on the main thread when asked.
+        assert!(!bg.result_with_hierarchy().unwrap().hierarchy.is_empty());
+    }
+
+    #[test]
+    fn a_background_run_reports_the_cores_error_and_stops_when_dropped() {
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let bad = Params {
+            samples: 10,
+            ..Params::default()
+        };
+        let mut s = Session::in_background(mesh.clone(), bad);
+        assert_eq!(collect_all(&mut s), Progress::Failed);
+        assert!(s.error().unwrap().to_string().contains("samples"));
+        // Dropped while running: the cancel flag stops it at its next step.
+        let s = Session::in_background(mesh, Params::default());
+        let Stage::Background(inbox) = &s.stage else {
+            panic!("not in the background");
+        };
+        let inbox = inbox.clone();
+        drop(s);
+        assert!(inbox.cancel.is_cancelled());
+        for _ in 0..60_000 {
+            if inbox.mail.lock().unwrap().end.is_some() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let mail = inbox.mail.lock().unwrap();
+        assert!(
+            matches!(mail.end, Some((Err(Error::Cancelled), _))),
+            "{:?}",
+            mail.end.as_ref().map(|e| e.0.is_ok())
+        );
     }
 
     #[test]

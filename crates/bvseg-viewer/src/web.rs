@@ -87,3 +87,8 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
         )
         .await
 }
+
+/// The page's threaded build: `initThreadPool(n)` starts `n` Web Workers for the core (main.js
+/// calls it before [`start`] when the page is cross-origin isolated).
+#[cfg(feature = "threads")]
+pub use wasm_bindgen_rayon::init_thread_pool;

@@ -5,9 +5,9 @@ use std::sync::{Arc, Mutex};
 use bvseg_core::{Kinds, Mesh, Params, Segmentation, Shape};
 use eframe::egui;
 use eframe::glow;
-use web_time::Instant;
+use web_time::{Duration, Instant};
 
-use crate::budget::FrameBudget;
+use crate::budget::{FrameBudget, NEWS_INTERVAL};
 use crate::camera::OrbitCamera;
 use crate::meshes::{self, BUNDLED};
 use crate::platform::{Inbox, Report, Reporter};
@@ -180,6 +180,11 @@ pub struct ViewerApp {
     inbox: Inbox,
     view_rect: Option<egui::Rect>,
     budget: FrameBudget,
+    /// While a run in the background is live: how long the next frame may wait (see
+    /// [`Self::advance`]).
+    next_frame: Option<Duration>,
+    /// When the news of the run in the background was last taken.
+    last_news: Option<Instant>,
     #[cfg(not(target_arch = "wasm32"))]
     native: NativeDialogs,
 }
@@ -259,6 +264,8 @@ impl ViewerApp {
             inbox: Inbox::default(),
             view_rect: None,
             budget: FrameBudget::default(),
+            next_frame: None,
+            last_news: None,
             #[cfg(not(target_arch = "wasm32"))]
             native: NativeDialogs::default(),
         };
@@ -389,6 +396,7 @@ impl ViewerApp {
         };
         self.session = Some(Session::new(model.mesh.clone(), self.settings.params()));
         self.run_id += 1;
+        self.last_news = None;
         self.status = Status::Running;
         self.history_pos = None;
         self.selected_part = None;
@@ -413,8 +421,23 @@ impl ViewerApp {
             return;
         };
         let t0 = Instant::now();
-        let progress = s.advance(self.budget.start(t0));
-        self.budget.worked(t0.elapsed());
+        let progress = if s.is_background() {
+            // The run needs no frames; a frame that shows news costs the drawing of a few
+            // (egui lays out again the panels that changed), so news is taken only so often.
+            let since = self.last_news.map(|l| t0.saturating_duration_since(l));
+            if let Some(since) = since.filter(|&d| d < NEWS_INTERVAL) {
+                self.next_frame = Some(NEWS_INTERVAL - since);
+                return;
+            }
+            self.last_news = Some(t0);
+            self.next_frame = Some(NEWS_INTERVAL);
+            s.advance(Duration::ZERO)
+        } else {
+            let progress = s.advance(self.budget.start(t0));
+            self.budget.worked(t0.elapsed());
+            self.next_frame = None;
+            progress
+        };
         match progress {
             Progress::Running => {}
             Progress::Done => {
@@ -452,7 +475,10 @@ impl ViewerApp {
         }
         self.advance();
         if self.status == Status::Running {
-            ctx.request_repaint();
+            match self.next_frame {
+                Some(wait) => ctx.request_repaint_after(wait),
+                None => ctx.request_repaint(),
+            }
         }
     }
 
