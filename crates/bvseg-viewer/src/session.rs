@@ -78,6 +78,20 @@ struct Mail {
 /// core's error.
 type Ending = Result<(Segmentation, Segmenter), Error>;
 
+/// The first panic on a thread of rayon's pool (see [`note_pool_panic`]).
+static POOL_PANIC: Mutex<Option<String>> = Mutex::new(None);
+
+/// Records a panic on a thread of rayon's pool. In the page's threaded build a panic aborts
+/// its Web Worker without unwinding, so the run in the background would never end; the
+/// session's next look turns this into the run's error instead (the pool is then a thread
+/// short: the page must be reloaded).
+pub fn note_pool_panic(message: &str) {
+    let mut first = POOL_PANIC
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    first.get_or_insert_with(|| message.to_string());
+}
+
 /// A run of the core on one mesh with one set of parameters.
 pub struct Session {
     mesh: Arc<Mesh>,
@@ -216,6 +230,13 @@ impl Session {
 
     /// Take the background run's news without waiting (the main thread of a page may not).
     fn collect(&mut self, inbox: &Inbox) -> Progress {
+        if let Some(msg) = POOL_PANIC.try_lock().ok().and_then(|p| p.clone()) {
+            inbox.cancel.cancel();
+            self.stage = Stage::Failed(Error::Internal(format!(
+                "the core panicked ({msg}); reload the page"
+            )));
+            return Progress::Failed;
+        }
         let Ok(mut mail) = inbox.mail.try_lock() else {
             return Progress::Running;
         };
@@ -447,6 +468,10 @@ mod tests {
         assert_eq!(direct.metrics, res.metrics);
     }
 
+    /// The tests of runs in the background, one at a time: a panic noted on the pool fails
+    /// every run in the background of the process.
+    static BACKGROUND: Mutex<()> = Mutex::new(());
+
     /// Collects a background run until it ends (natively the caller may wait in between).
     fn collect_all(s: &mut Session) -> Progress {
         for _ in 0..60_000 {
@@ -460,6 +485,9 @@ mod tests {
 
     #[test]
     fn a_run_in_the_background_gives_the_stepped_runs_steps_and_result() {
+        let _one = BACKGROUND
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
         let params = Params {
             samples: 3000,
@@ -488,6 +516,9 @@ mod tests {
 
     #[test]
     fn a_background_run_reports_the_cores_error_and_stops_when_dropped() {
+        let _one = BACKGROUND
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
         let bad = Params {
             samples: 10,
@@ -516,6 +547,29 @@ mod tests {
             "{:?}",
             mail.end.as_ref().map(|e| e.0.is_ok())
         );
+    }
+
+    #[test]
+    fn a_panic_on_the_pool_fails_the_background_run() {
+        let _one = BACKGROUND
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let mut s = Session::in_background(mesh, Params::default());
+        let Stage::Background(inbox) = &s.stage else {
+            panic!("not in the background");
+        };
+        let inbox = inbox.clone();
+        note_pool_panic("index out of bounds");
+        let failed = s.advance(Duration::ZERO);
+        *POOL_PANIC.lock().unwrap() = None;
+        assert_eq!(failed, Progress::Failed);
+        let msg = s.error().unwrap().to_string();
+        assert!(
+            msg.contains("index out of bounds") && msg.contains("reload"),
+            "{msg}"
+        );
+        assert!(inbox.cancel.is_cancelled(), "the run goes on");
     }
 
     #[test]

@@ -70,6 +70,13 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         let msg = info.to_string().replace('\n', " ");
+        if web_sys::window().is_none() {
+            // A Web Worker of the threaded build (the core): the session's next look fails
+            // the run. eframe's handler is not called, as it would stop the whole app.
+            web_sys::console::error_1(&format!("bvseg: the core panicked: {msg}").into());
+            crate::session::note_pool_panic(&msg);
+            return;
+        }
         set_title(&format!("bvseg: error: panic: {msg}"));
         previous(info);
     }));
