@@ -472,6 +472,20 @@ mod tests {
     /// every run in the background of the process.
     static BACKGROUND: Mutex<()> = Mutex::new(());
 
+    fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+        BACKGROUND
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// The inbox of a run in the background.
+    fn inbox_of(s: &Session) -> Arc<Inbox> {
+        let Stage::Background(inbox) = &s.stage else {
+            panic!("not in the background");
+        };
+        inbox.clone()
+    }
+
     /// Collects a background run until it ends (natively the caller may wait in between).
     fn collect_all(s: &mut Session) -> Progress {
         for _ in 0..60_000 {
@@ -485,9 +499,7 @@ mod tests {
 
     #[test]
     fn a_run_in_the_background_gives_the_stepped_runs_steps_and_result() {
-        let _one = BACKGROUND
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let _one = one_at_a_time();
         let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
         let params = Params {
             samples: 3000,
@@ -516,9 +528,7 @@ mod tests {
 
     #[test]
     fn a_background_run_reports_the_cores_error_and_stops_when_dropped() {
-        let _one = BACKGROUND
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let _one = one_at_a_time();
         let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
         let bad = Params {
             samples: 10,
@@ -529,10 +539,7 @@ mod tests {
         assert!(s.error().unwrap().to_string().contains("samples"));
         // Dropped while running: the cancel flag stops it at its next step.
         let s = Session::in_background(mesh, Params::default());
-        let Stage::Background(inbox) = &s.stage else {
-            panic!("not in the background");
-        };
-        let inbox = inbox.clone();
+        let inbox = inbox_of(&s);
         drop(s);
         assert!(inbox.cancel.is_cancelled());
         for _ in 0..60_000 {
@@ -551,15 +558,10 @@ mod tests {
 
     #[test]
     fn a_panic_on_the_pool_fails_the_background_run() {
-        let _one = BACKGROUND
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let _one = one_at_a_time();
         let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
         let mut s = Session::in_background(mesh, Params::default());
-        let Stage::Background(inbox) = &s.stage else {
-            panic!("not in the background");
-        };
-        let inbox = inbox.clone();
+        let inbox = inbox_of(&s);
         note_pool_panic("index out of bounds");
         let failed = s.advance(Duration::ZERO);
         *POOL_PANIC.lock().unwrap() = None;
