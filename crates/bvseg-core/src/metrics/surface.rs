@@ -69,19 +69,29 @@ impl SurfaceDistance {
     /// `None` (without searching) once `spent` exceeds `cap`. `bound` is an upper bound of
     /// the distance (infinite if none is known): with a good one, the search prunes most of
     /// the tree, and the result is exact either way (if no triangle is nearer than the bound,
-    /// the distance is the bound). The caller adds `spent` to [`crate::work`], once, rather
-    /// than every query contending for that shared counter.
+    /// the distance is the bound). A caller that needs the distance only when it exceeds
+    /// `floor` gets, when it does not, some value at most `floor` (an upper bound of the
+    /// distance, found without proving it the nearest): most of a query's work is that proof.
+    /// The caller adds `spent` to [`crate::work`], once, rather than every query contending
+    /// for that shared counter.
     pub fn distance_within(
         &self,
         p: DVec3,
-        bound: f64,
+        (bound, floor): (f64, f64),
         spent: &std::cell::Cell<u64>,
         cap: u64,
     ) -> Option<f64> {
         if spent.get() > cap {
             return None;
         }
-        let (d, visited) = self.search(p, bound * bound);
+        // Below this squared distance the root is below `floor` for certain (the factor
+        // covers the rounding of the square and of the root).
+        let stop = if floor > 0.0 {
+            floor * floor * (1.0 - 1e-12)
+        } else {
+            f64::NEG_INFINITY
+        };
+        let (d, visited) = self.search(p, bound * bound, stop);
         spent.set(spent.get() + visited as u64);
         Some(d.sqrt())
     }
@@ -89,13 +99,14 @@ impl SurfaceDistance {
     /// Squared [`SurfaceDistance::distance`].
     #[cfg(test)]
     pub fn distance_squared(&self, p: DVec3) -> f64 {
-        self.search(p, f64::INFINITY).0
+        self.search(p, f64::INFINITY, f64::NEG_INFINITY).0
     }
 
-    /// The squared distance (at most `bound`) and the number of nodes and triangles visited.
-    fn search(&self, p: DVec3, bound: f64) -> (f64, usize) {
+    /// The squared distance (at most `bound`) and the number of nodes and triangles visited;
+    /// once a triangle at most `stop` away is found, that triangle's instead.
+    fn search(&self, p: DVec3, bound: f64, stop: f64) -> (f64, usize) {
         let mut best = bound;
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || best <= stop {
             return (best, 0);
         }
         // The tree is balanced (median splits), so the stack holds at most one node per level
@@ -117,6 +128,9 @@ impl SurfaceDistance {
                 visited += c;
                 for t in &self.tris[s..s + c] {
                     best = best.min((closest_on_triangle(p, t) - p).length_squared());
+                }
+                if best <= stop {
+                    return (best, visited);
                 }
             } else {
                 let (l, r) = (i + 1, node.start);
@@ -283,6 +297,43 @@ mod tests {
             let (t, b) = (tree.distance(p), brute(&mesh, p));
             assert!((t - b).abs() <= 1e-12 * b.max(1.0), "{p}: {t} vs {b}");
         }
+    }
+
+    /// With a floor, a distance above it is the exact one, bit for bit, and one at or below
+    /// it is any value from the distance up to the floor, found with less work.
+    #[test]
+    fn a_floor_keeps_the_distances_above_it_exact() {
+        let mesh = shapes::ellipsoid(DVec3::ZERO, DVec3::new(2.0, 1.0, 0.5), DMat3::IDENTITY, 24);
+        let tree = SurfaceDistance::new(&mesh);
+        let mut rng = Rng::new(3);
+        let (mut above, mut below, mut saved) = (0, 0, 0u64);
+        for _ in 0..500 {
+            let p = DVec3::new(
+                rng.next_f64() * 6.0 - 3.0,
+                rng.next_f64() * 4.0 - 2.0,
+                rng.next_f64() * 4.0 - 2.0,
+            );
+            let floor = rng.next_f64() * 1.5;
+            let (plain, with) = (std::cell::Cell::new(0), std::cell::Cell::new(0));
+            let exact =
+                tree.distance_within(p, (f64::INFINITY, f64::NEG_INFINITY), &plain, u64::MAX);
+            let got = tree.distance_within(p, (f64::INFINITY, floor), &with, u64::MAX);
+            let (exact, got) = (exact.unwrap(), got.unwrap());
+            assert!(with.get() <= plain.get());
+            if exact > floor {
+                assert_eq!(got.to_bits(), exact.to_bits(), "{p}, floor {floor}");
+                above += 1;
+            } else {
+                assert!(
+                    got >= exact && got <= floor,
+                    "{p}: {got} vs {exact}, floor {floor}"
+                );
+                below += 1;
+                saved += plain.get() - with.get();
+            }
+        }
+        assert!(above > 50 && below > 50, "{above} above, {below} below");
+        assert!(saved > 0);
     }
 
     #[test]
