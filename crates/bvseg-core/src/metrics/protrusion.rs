@@ -70,12 +70,14 @@ pub fn protrusion_capped(
     // The distance is 1-Lipschitz: the last point's distance plus the step to this one bounds
     // it, and lets the search skip most of the tree (the samples and the pattern search move
     // in small steps).
+    // For the same reason, the last point's nearest triangle is tried first.
     let last = std::cell::Cell::new(None::<(DVec3, f64)>);
+    let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
     let exact = protrusion_by(v, grid, others, |p, floor| {
         let bound = last
             .get()
             .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
-        let d = surface.distance_within(p, (bound, floor), &spent, cap)?;
+        let d = surface.distance_within(p, (bound, floor), &near, &spent, cap)?;
         last.set(Some((p, d)));
         Some(d)
     });

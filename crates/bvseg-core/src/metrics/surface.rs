@@ -8,6 +8,9 @@ use glam::DVec3;
 
 use crate::Mesh;
 
+/// No triangle yet, for the start of a search (see [`SurfaceDistance::distance_within`]).
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
 /// Triangles per leaf.
 const LEAF: usize = 4;
 
@@ -72,12 +75,16 @@ impl SurfaceDistance {
     /// the distance is the bound). A caller that needs the distance only when it exceeds
     /// `floor` gets, when it does not, some value at most `floor` (an upper bound of the
     /// distance, found without proving it the nearest): most of a query's work is that proof.
+    /// `near` is a triangle (an index of this tree's, as the last query left it) to try
+    /// first: queries at nearby points have nearby nearest triangles, and one close enough
+    /// settles a query below the floor at once. The query leaves its nearest triangle there.
     /// The caller adds `spent` to [`crate::work`], once, rather than every query contending
     /// for that shared counter.
     pub fn distance_within(
         &self,
         p: DVec3,
         (bound, floor): (f64, f64),
+        near: &std::cell::Cell<u32>,
         spent: &std::cell::Cell<u64>,
         cap: u64,
     ) -> Option<f64> {
@@ -91,7 +98,7 @@ impl SurfaceDistance {
         } else {
             f64::NEG_INFINITY
         };
-        let (d, visited) = self.search(p, bound * bound, stop);
+        let (d, visited) = self.search(p, (bound * bound, stop), near);
         spent.set(spent.get() + visited as u64);
         Some(d.sqrt())
     }
@@ -99,22 +106,38 @@ impl SurfaceDistance {
     /// Squared [`SurfaceDistance::distance`].
     #[cfg(test)]
     pub fn distance_squared(&self, p: DVec3) -> f64 {
-        self.search(p, f64::INFINITY, f64::NEG_INFINITY).0
+        let near = std::cell::Cell::new(NO_TRIANGLE);
+        self.search(p, (f64::INFINITY, f64::NEG_INFINITY), &near).0
     }
 
     /// The squared distance (at most `bound`) and the number of nodes and triangles visited;
-    /// once a triangle at most `stop` away is found, that triangle's instead.
-    fn search(&self, p: DVec3, bound: f64, stop: f64) -> (f64, usize) {
+    /// once a triangle at most `stop` away is found, that triangle's instead. Starts from
+    /// triangle `near` and leaves the nearest found there. The nearest triangle gives the
+    /// same minimum whichever is tried first: a start only prunes nodes that cannot hold a
+    /// nearer one.
+    fn search(
+        &self,
+        p: DVec3,
+        (bound, stop): (f64, f64),
+        near: &std::cell::Cell<u32>,
+    ) -> (f64, usize) {
         let mut best = bound;
         if self.nodes.is_empty() || best <= stop {
             return (best, 0);
+        }
+        let mut visited = 0usize;
+        if let Some(t) = self.tris.get(near.get() as usize) {
+            visited += 1;
+            best = best.min((closest_on_triangle(p, t) - p).length_squared());
+            if best <= stop {
+                return (best, visited);
+            }
         }
         // The tree is balanced (median splits), so the stack holds at most one node per level
         // plus one: a fixed array, where a vector cost an allocation per query.
         let mut stack = [(0u32, 0.0f64); STACK];
         stack[0] = (0, box_distance_squared(&self.nodes[0], p));
         let mut top = 1;
-        let mut visited = 0usize;
         while top > 0 {
             top -= 1;
             let (i, d) = stack[top];
@@ -126,8 +149,12 @@ impl SurfaceDistance {
             if node.count > 0 {
                 let (s, c) = (node.start as usize, node.count as usize);
                 visited += c;
-                for t in &self.tris[s..s + c] {
-                    best = best.min((closest_on_triangle(p, t) - p).length_squared());
+                for (j, t) in self.tris[s..s + c].iter().enumerate() {
+                    let d = (closest_on_triangle(p, t) - p).length_squared();
+                    if d < best {
+                        best = d;
+                        near.set((s + j) as u32);
+                    }
                 }
                 if best <= stop {
                     return (best, visited);
@@ -315,9 +342,10 @@ mod tests {
             );
             let floor = rng.next_f64() * 1.5;
             let (plain, with) = (std::cell::Cell::new(0), std::cell::Cell::new(0));
-            let exact =
-                tree.distance_within(p, (f64::INFINITY, f64::NEG_INFINITY), &plain, u64::MAX);
-            let got = tree.distance_within(p, (f64::INFINITY, floor), &with, u64::MAX);
+            let near = || std::cell::Cell::new(NO_TRIANGLE);
+            let all = (f64::INFINITY, f64::NEG_INFINITY);
+            let exact = tree.distance_within(p, all, &near(), &plain, u64::MAX);
+            let got = tree.distance_within(p, (f64::INFINITY, floor), &near(), &with, u64::MAX);
             let (exact, got) = (exact.unwrap(), got.unwrap());
             assert!(with.get() <= plain.get());
             if exact > floor {
