@@ -61,7 +61,7 @@ threads_wasm=""
 # creates and hands to each worker (imported), with the thread-local storage exports that
 # wasm-bindgen's thread support calls.
 threads_flags="-C target-feature=+simd128,+atomics,+bulk-memory,+mutable-globals"
-for arg in --shared-memory --import-memory --max-memory=1073741824 --export=__wasm_init_tls \
+for arg in --shared-memory --import-memory --max-memory=4294967296 --export=__wasm_init_tls \
     --export=__tls_size --export=__tls_align --export=__tls_base; do
     threads_flags+=" -C link-arg=$arg"
 done

@@ -9,6 +9,7 @@
 //!
 //! Cancelling is dropping the session. Every step leaves a [`Snapshot`], so the history can be
 //! stepped back through after (and during) the run.
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use bvseg_core::{
@@ -78,18 +79,65 @@ struct Mail {
 /// core's error.
 type Ending = Result<(Segmentation, Segmenter), Error>;
 
-/// The first panic on a thread of rayon's pool (see [`note_pool_panic`]).
-static POOL_PANIC: Mutex<Option<String>> = Mutex::new(None);
+/// The first failure of a thread of rayon's pool, as the run's error will say it (see
+/// [`note_pool_panic`] and [`note_worker_failure`]).
+static POOL_FAILURE: Mutex<Option<String>> = Mutex::new(None);
 
 /// Records a panic on a thread of rayon's pool. In the page's threaded build a panic aborts
 /// its Web Worker without unwinding, so the run in the background would never end; the
 /// session's next look turns this into the run's error instead (the pool is then a thread
 /// short: the page must be reloaded).
 pub fn note_pool_panic(message: &str) {
-    let mut first = POOL_PANIC
+    let mut first = POOL_FAILURE
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    first.get_or_insert_with(|| message.to_string());
+    first.get_or_insert_with(|| format!("the core panicked ({message})"));
+}
+
+/// The size of an allocation that failed (0: none did). Running out of memory aborts the
+/// thread without a panic, so in the page's threaded build the run would wait forever for
+/// its dead worker; the page's allocator ([`NotingAllocator`]) notes the failure here first,
+/// and the session's next look fails the run with it. Not a lock: a thread out of memory
+/// cannot format a message, nor may the allocator wait.
+static ALLOCATION_FAILED: AtomicUsize = AtomicUsize::new(0);
+
+/// An allocator that notes its failures (see [`ALLOCATION_FAILED`]) before the runtime
+/// aborts the thread: the page's threaded build wraps the system allocator in it.
+pub struct NotingAllocator<A>(pub A);
+
+// SAFETY: every call goes to the wrapped allocator unchanged; a null result is only noted.
+unsafe impl<A: std::alloc::GlobalAlloc> std::alloc::GlobalAlloc for NotingAllocator<A> {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        noted(unsafe { self.0.alloc(layout) }, layout.size())
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: as above.
+        noted(unsafe { self.0.alloc_zeroed(layout) }, layout.size())
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, new: usize) -> *mut u8 {
+        // SAFETY: as above.
+        noted(unsafe { self.0.realloc(ptr, layout, new) }, new)
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: as above.
+        unsafe { self.0.dealloc(ptr, layout) }
+    }
+}
+
+fn noted(ptr: *mut u8, size: usize) -> *mut u8 {
+    if ptr.is_null() {
+        let _ = ALLOCATION_FAILED.compare_exchange(
+            0,
+            size.max(1),
+            Ordering::Relaxed,
+            Ordering::Relaxed,
+        );
+    }
+    ptr
 }
 
 /// A run of the core on one mesh with one set of parameters.
@@ -230,11 +278,22 @@ impl Session {
 
     /// Take the background run's news without waiting (the main thread of a page may not).
     fn collect(&mut self, inbox: &Inbox) -> Progress {
-        if let Some(msg) = POOL_PANIC.try_lock().ok().and_then(|p| p.clone()) {
+        // Out of memory is the input's size (the sample count), a panic a bug.
+        let failed = match ALLOCATION_FAILED.load(Ordering::Relaxed) {
+            0 => POOL_FAILURE
+                .try_lock()
+                .ok()
+                .and_then(|p| p.clone())
+                .map(|msg| Error::Internal(format!("{msg}; reload the page"))),
+            size => Some(Error::TooComplex(format!(
+                "the core ran out of memory (an allocation of {:.1} MB failed); reload the \
+                 page and try fewer samples",
+                size as f64 / 1e6
+            ))),
+        };
+        if let Some(e) = failed {
             inbox.cancel.cancel();
-            self.stage = Stage::Failed(Error::Internal(format!(
-                "the core panicked ({msg}); reload the page"
-            )));
+            self.stage = Stage::Failed(e);
             return Progress::Failed;
         }
         let Ok(mut mail) = inbox.mail.try_lock() else {
@@ -564,11 +623,62 @@ mod tests {
         let inbox = inbox_of(&s);
         note_pool_panic("index out of bounds");
         let failed = s.advance(Duration::ZERO);
-        *POOL_PANIC.lock().unwrap() = None;
+        *POOL_FAILURE.lock().unwrap() = None;
         assert_eq!(failed, Progress::Failed);
         let msg = s.error().unwrap().to_string();
         assert!(
-            msg.contains("index out of bounds") && msg.contains("reload"),
+            msg.contains("panicked (index out of bounds)") && msg.contains("reload"),
+            "{msg}"
+        );
+        assert!(inbox.cancel.is_cancelled(), "the run goes on");
+    }
+
+    /// An allocation that failed (as the page's allocator notes it) fails the run too, with
+    /// what the allocator saw.
+    #[test]
+    fn running_out_of_memory_fails_the_background_run() {
+        use std::alloc::{GlobalAlloc, Layout, System};
+        /// An allocator with no memory above a megabyte.
+        struct Small;
+        // SAFETY: passes the calls it does not refuse on to the system allocator.
+        unsafe impl GlobalAlloc for Small {
+            unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+                if layout.size() > 1 << 20 {
+                    return std::ptr::null_mut();
+                }
+                unsafe { System.alloc(layout) }
+            }
+            unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+                unsafe { System.dealloc(ptr, layout) }
+            }
+        }
+        let _one = one_at_a_time();
+        let noting = NotingAllocator(Small);
+        let small = Layout::from_size_align(64, 8).unwrap();
+        // SAFETY: a valid layout; the block is freed with it.
+        unsafe {
+            let p = noting.alloc(small);
+            assert!(!p.is_null());
+            noting.dealloc(p, small);
+        }
+        assert_eq!(
+            ALLOCATION_FAILED.load(Ordering::Relaxed),
+            0,
+            "noted a success"
+        );
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let mut s = Session::in_background(mesh, Params::default());
+        let inbox = inbox_of(&s);
+        // SAFETY: a valid layout; the null result is not used.
+        let p = unsafe { noting.alloc(Layout::from_size_align(3 << 20, 8).unwrap()) };
+        assert!(p.is_null());
+        let failed = s.advance(Duration::ZERO);
+        ALLOCATION_FAILED.store(0, Ordering::Relaxed);
+        assert_eq!(failed, Progress::Failed);
+        let msg = s.error().unwrap().to_string();
+        assert!(
+            msg.contains("ran out of memory (an allocation of 3.1 MB failed)")
+                && msg.contains("reload"),
             "{msg}"
         );
         assert!(inbox.cancel.is_cancelled(), "the run goes on");

@@ -99,3 +99,11 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
 /// calls it before [`start`] when the page is cross-origin isolated).
 #[cfg(feature = "threads")]
 pub use wasm_bindgen_rayon::init_thread_pool;
+
+/// The threaded build's allocator: running out of memory aborts a Web Worker without a
+/// panic, and the run waiting for it would never end; this one notes the failure first, so
+/// that the run ends with an error.
+#[cfg(feature = "threads")]
+#[global_allocator]
+static ALLOCATOR: crate::session::NotingAllocator<std::alloc::System> =
+    crate::session::NotingAllocator(std::alloc::System);
