@@ -101,8 +101,8 @@ pub fn note_pool_panic(message: &str) {
 /// cannot format a message, nor may the allocator wait.
 static ALLOCATION_FAILED: AtomicUsize = AtomicUsize::new(0);
 
-/// An allocator that notes its failures (see [`ALLOCATION_FAILED`]) before the runtime
-/// aborts the thread: the page's threaded build wraps the system allocator in it.
+/// An allocator that notes its failures, for the session to read, before the runtime aborts
+/// the thread: the page's threaded build wraps the system allocator in it.
 pub struct NotingAllocator<A>(pub A);
 
 // SAFETY: every call goes to the wrapped allocator unchanged; a null result is only noted.
