@@ -98,7 +98,8 @@ pub fn note_pool_panic(message: &str) {
 /// thread without a panic, so in the page's threaded build the run would wait forever for
 /// its dead worker; the page's allocator ([`NotingAllocator`]) notes the failure here first,
 /// and the session's next look fails the run with it. Not a lock: a thread out of memory
-/// cannot format a message, nor may the allocator wait.
+/// cannot format a message, nor may the allocator wait. (A failure that the program handles,
+/// as `Vec::try_reserve` lets it, would count too; nothing in bvseg makes one.)
 static ALLOCATION_FAILED: AtomicUsize = AtomicUsize::new(0);
 
 /// An allocator that notes its failures, for the session to read, before the runtime aborts
@@ -646,9 +647,11 @@ mod tests {
                 if layout.size() > 1 << 20 {
                     return std::ptr::null_mut();
                 }
+                // SAFETY: the caller's contract, passed on.
                 unsafe { System.alloc(layout) }
             }
             unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+                // SAFETY: as above (only the system allocator's blocks reach here).
                 unsafe { System.dealloc(ptr, layout) }
             }
         }
