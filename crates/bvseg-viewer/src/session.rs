@@ -619,19 +619,27 @@ mod tests {
     #[test]
     fn a_panic_on_the_pool_fails_the_background_run() {
         let _one = one_at_a_time();
+        let msg = failure_of_a_run_after(
+            || note_pool_panic("index out of bounds"),
+            || *POOL_FAILURE.lock().unwrap() = None,
+        );
+        assert!(msg.contains("panicked (index out of bounds)"), "{msg}");
+    }
+
+    /// The error of a default background run whose pool `fail`s as it starts (`reset` undoes
+    /// that for the other tests): the run fails at once, is cancelled, and says to reload.
+    fn failure_of_a_run_after(fail: impl FnOnce(), reset: impl FnOnce()) -> String {
         let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
         let mut s = Session::in_background(mesh, Params::default());
         let inbox = inbox_of(&s);
-        note_pool_panic("index out of bounds");
+        fail();
         let failed = s.advance(Duration::ZERO);
-        *POOL_FAILURE.lock().unwrap() = None;
+        reset();
         assert_eq!(failed, Progress::Failed);
         let msg = s.error().unwrap().to_string();
-        assert!(
-            msg.contains("panicked (index out of bounds)") && msg.contains("reload"),
-            "{msg}"
-        );
+        assert!(msg.contains("reload"), "{msg}");
         assert!(inbox.cancel.is_cancelled(), "the run goes on");
+        msg
     }
 
     /// An allocation that failed (as the page's allocator notes it) fails the run too, with
@@ -669,22 +677,18 @@ mod tests {
             0,
             "noted a success"
         );
-        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
-        let mut s = Session::in_background(mesh, Params::default());
-        let inbox = inbox_of(&s);
-        // SAFETY: a valid layout; the null result is not used.
-        let p = unsafe { noting.alloc(Layout::from_size_align(3 << 20, 8).unwrap()) };
-        assert!(p.is_null());
-        let failed = s.advance(Duration::ZERO);
-        ALLOCATION_FAILED.store(0, Ordering::Relaxed);
-        assert_eq!(failed, Progress::Failed);
-        let msg = s.error().unwrap().to_string();
+        let msg = failure_of_a_run_after(
+            || {
+                // SAFETY: a valid layout; the null result is not used.
+                let p = unsafe { noting.alloc(Layout::from_size_align(3 << 20, 8).unwrap()) };
+                assert!(p.is_null());
+            },
+            || ALLOCATION_FAILED.store(0, Ordering::Relaxed),
+        );
         assert!(
-            msg.contains("ran out of memory (an allocation of 3.1 MB failed)")
-                && msg.contains("reload"),
+            msg.contains("ran out of memory (an allocation of 3.1 MB failed)"),
             "{msg}"
         );
-        assert!(inbox.cancel.is_cancelled(), "the run goes on");
     }
 
     #[test]

@@ -128,7 +128,7 @@ impl SurfaceDistance {
         let mut visited = 0usize;
         if let Some(t) = self.tris.get(near.get() as usize) {
             visited += 1;
-            best = best.min((closest_on_triangle(p, t) - p).length_squared());
+            best = best.min(distance_squared_to(p, t));
             if best <= stop {
                 return (best, visited);
             }
@@ -150,7 +150,7 @@ impl SurfaceDistance {
                 let (s, c) = (node.start as usize, node.count as usize);
                 visited += c;
                 for (j, t) in self.tris[s..s + c].iter().enumerate() {
-                    let d = (closest_on_triangle(p, t) - p).length_squared();
+                    let d = distance_squared_to(p, t);
                     if d < best {
                         best = d;
                         near.set((s + j) as u32);
@@ -227,6 +227,10 @@ fn centroid(t: &[DVec3; 3]) -> DVec3 {
 fn box_distance_squared(n: &Node, p: DVec3) -> f64 {
     let d = (n.lo - p).max(p - n.hi).max(DVec3::ZERO);
     d.length_squared()
+}
+
+fn distance_squared_to(p: DVec3, t: &[DVec3; 3]) -> f64 {
+    (closest_on_triangle(p, t) - p).length_squared()
 }
 
 /// The point of triangle `t` nearest `p` (Ericson, *Real-Time Collision Detection*, 5.1.5).
