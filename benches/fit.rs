@@ -7,8 +7,8 @@
 //! Each benchmark fits every part once per iteration; the throughput line gives fits per
 //! second, and the per-fit time is the iteration time divided by the part count printed
 //! before it. `make_hull_then_fit` is what `Fitter` does for a part (less the outside-cell
-//! count): `hull_points`, then `Fitter::fit_points` on the hull. `min_capsule`, `min_cylinder`
-//! and `min_capsule_and_cylinder` time those kinds' searches on the parts' hulls.
+//! count): `hull_points`, then `Fitter::fit_points` on the hull. `min_capsule`, `min_cylinder`,
+//! `min_capsule_and_cylinder` and `min_obb` time those kinds' searches on the parts' hulls.
 // Tests and benchmarks state their expectations by panicking.
 // criterion_group! defines undocumented public functions.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
@@ -19,7 +19,7 @@ use bvseg::internals::mvee_of_hull;
 use bvseg::internals::Enclosure;
 use bvseg::internals::Grid;
 use bvseg::internals::Solid;
-use bvseg::internals::{min_axial, min_capsule_and_cylinder, Axial};
+use bvseg::internals::{min_axial, min_capsule_and_cylinder, min_obb, Axial};
 use bvseg::internals::{Fitter, MVEE_TOL};
 use bvseg::{Kinds, Mesh};
 use criterion::measurement::WallTime;
@@ -134,6 +134,7 @@ fn bench(c: &mut Criterion) {
         each_hull(&mut g, "min_capsule_and_cylinder", &hulls, |h| {
             min_capsule_and_cylinder(h, min_r)
         });
+        each_hull(&mut g, "min_obb", &hulls, |h| min_obb(h, min_r));
         g.finish();
 
         // One part alone, the one with the most points.

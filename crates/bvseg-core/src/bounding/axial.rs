@@ -18,6 +18,7 @@ use std::collections::HashMap;
 use glam::{DMat3, DVec2, DVec3};
 
 use super::ball::{circle3_radius_below, finite_shuffled, min_circle_in_order};
+use super::extremes;
 use crate::linalg::sym_eigen;
 use crate::volume::BoundingVolume;
 #[cfg(test)]
@@ -64,6 +65,8 @@ pub fn min_capsule_and_cylinder(points: &[DVec3], min_r: f64) -> [BoundingVolume
 struct Circles<'a> {
     p: &'a [DVec3],
     known: RefCell<HashMap<[u64; 3], Across>>,
+    /// [`fit_with`]'s buffers: the points across and along a direction.
+    scratch: RefCell<(Vec<DVec2>, Vec<f64>)>,
 }
 
 /// The points seen along and across a direction.
@@ -83,6 +86,7 @@ impl<'a> Circles<'a> {
         Self {
             p,
             known: RefCell::default(),
+            scratch: RefCell::default(),
         }
     }
 
@@ -244,13 +248,12 @@ fn seeds(p: &[DVec3]) -> Vec<DVec3> {
     // The widest pair among the extreme points along the 26-DOP's axes.
     let mut ext = Vec::with_capacity(26);
     for d in dop {
-        let key = |q: &&DVec3| q.dot(d);
-        if let (Some(lo), Some(hi)) = (
-            p.iter().min_by(|x, y| key(x).total_cmp(&key(y))),
-            p.iter().max_by(|x, y| key(x).total_cmp(&key(y))),
-        ) {
-            ext.extend([*lo, *hi]);
-        }
+        ext.extend(
+            extremes(p, |q| q.dot(d))
+                .into_iter()
+                .flatten()
+                .map(|i| p[i]),
+        );
     }
     let mut wide = (0.0, DVec3::Z);
     for i in 0..ext.len() {
@@ -284,8 +287,10 @@ fn fit_with(
     let p = circles.p;
     let u = a.any_orthonormal_vector();
     let w = a.cross(u);
-    let flat: Vec<DVec2> = p.iter().map(|&q| DVec2::new(q.dot(u), q.dot(w))).collect();
-    let z: Vec<f64> = p.iter().map(|&q| q.dot(a)).collect();
+    let mut scratch = circles.scratch.borrow_mut();
+    let (flat, z) = &mut *scratch;
+    z.clear();
+    z.extend(p.iter().map(|&q| q.dot(a)));
     let (mut zlo, mut zhi, mut ends) = (f64::INFINITY, f64::NEG_INFINITY, [0; 2]);
     for (i, &x) in z.iter().enumerate() {
         if x < zlo {
@@ -296,7 +301,16 @@ fn fit_with(
         }
         (zlo, zhi) = (zlo.min(x), zhi.max(x));
     }
-    let (c2, circle) = circles.of(a, &flat, ends);
+    // A cylinder along a direction tried before needs only the points' extent along it.
+    let known = circles.get(a).filter(|_| kind == Axial::Cylinder);
+    let (c2, circle) = match known {
+        Some(k) => (k.centre, k.radius),
+        None => {
+            flat.clear();
+            flat.extend(p.iter().map(|&q| DVec2::new(q.dot(u), q.dot(w))));
+            circles.of(a, flat, ends)
+        }
+    };
     let big_r = circle.max(min_r);
     let line = u * c2.x + w * c2.y;
     match kind {
@@ -306,7 +320,7 @@ fn fit_with(
         }
         Axial::Capsule if !search_radius => {
             let (mut z0, mut z1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for (q, &zi) in flat.iter().zip(&z) {
+            for (q, &zi) in flat.iter().zip(z.iter()) {
                 let s = (big_r * big_r - (*q - c2).length_squared()).max(0.0).sqrt();
                 z0 = z0.min(zi + s);
                 z1 = z1.max(zi - s);

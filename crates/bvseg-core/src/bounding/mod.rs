@@ -30,6 +30,24 @@ pub fn fit(shape: Shape, points: &[DVec3], min_r: f64, max_hull_vertices: usize)
     }
 }
 
+/// The indices of the first least and the last greatest `key` over `items` (by `total_cmp`:
+/// the ones `Iterator::min_by` and `max_by` pick), each key computed once; `None` for no
+/// items. The fits' searches seed from extreme points along fixed directions.
+pub fn extremes<T: Copy>(items: &[T], key: impl Fn(T) -> f64) -> Option<[usize; 2]> {
+    let first = key(*items.first()?);
+    let (mut lo, mut hi) = ((0, first), (0, first));
+    for (i, &x) in items.iter().enumerate().skip(1) {
+        let k = key(x);
+        if k.total_cmp(&lo.1).is_lt() {
+            lo = (i, k);
+        }
+        if k.total_cmp(&hi.1).is_ge() {
+            hi = (i, k);
+        }
+    }
+    Some([lo.0, hi.0])
+}
+
 /// The volumes of each of `shapes` (in their order) fitted to `points`, as [`fit`] gives
 /// them; the kinds are fitted in parallel, the capsule and the cylinder as one search
 /// (see [`axial::min_capsule_and_cylinder`]).
@@ -98,6 +116,23 @@ mod tests {
             let together = fit_each(&shapes, &pts, 1e-6, 32);
             let each: Vec<BoundingVolume> = shapes.iter().map(|&s| alone(s)).collect();
             assert_eq!(together, each, "{shapes:?}");
+        }
+    }
+
+    /// The extremes are the ones `min_by` and `max_by` pick, ties and signed zeros included.
+    #[test]
+    fn extremes_pick_as_min_by_and_max_by() {
+        let mut rng = crate::rng::Rng::new(3);
+        for n in 0..60 {
+            // Few distinct values, so ties are common; both zeros among them.
+            let v: Vec<f64> = (0..n)
+                .map(|_| [-1.0, -0.0, 0.0, 0.5, 2.0][rng.below(5)])
+                .collect();
+            let key = |a: &(usize, &f64), b: &(usize, &f64)| a.1.total_cmp(b.1);
+            let lo = v.iter().enumerate().min_by(key).map(|x| x.0);
+            let hi = v.iter().enumerate().max_by(key).map(|x| x.0);
+            let want = lo.zip(hi).map(|(a, b)| [a, b]);
+            assert_eq!(extremes(&v, |x| x), want, "{v:?}");
         }
     }
 

@@ -17,6 +17,7 @@
 use crate::math;
 use glam::{DMat3, DVec2, DVec3};
 
+use super::extremes;
 use super::hull::convex_hull;
 use crate::linalg::{orthonormalize, sym_eigen};
 use crate::volume::{BoundingVolume, Shape};
@@ -184,10 +185,12 @@ fn dito_frames(v: &[DVec3]) -> Vec<DMat3> {
     ];
     let mut ext: Vec<DVec3> = Vec::with_capacity(14);
     for d in DIRS.map(DVec3::from_array) {
-        let key = |p: &&DVec3| d.dot(**p);
-        let lo = v.iter().min_by(|a, b| key(a).total_cmp(&key(b)));
-        let hi = v.iter().max_by(|a, b| key(a).total_cmp(&key(b)));
-        ext.extend(lo.into_iter().chain(hi).copied());
+        ext.extend(
+            extremes(v, |p| d.dot(p))
+                .into_iter()
+                .flatten()
+                .map(|i| v[i]),
+        );
     }
     let mut best = (0.0, DVec3::ZERO, DVec3::ZERO);
     for (i, &a) in ext.iter().enumerate() {
@@ -210,10 +213,11 @@ fn dito_frames(v: &[DVec3]) -> Vec<DMat3> {
     let mut tris = vec![[p0, p1, p2]];
     let n = e0.cross(p2 - p0);
     if n.length_squared() > 0.0 {
-        let key = |p: &&DVec3| n.dot(**p);
-        let lo = v.iter().min_by(|a, b| key(a).total_cmp(&key(b)));
-        let hi = v.iter().max_by(|a, b| key(a).total_cmp(&key(b)));
-        for &q in lo.into_iter().chain(hi) {
+        for q in extremes(v, |p| n.dot(p))
+            .into_iter()
+            .flatten()
+            .map(|i| v[i])
+        {
             tris.extend([[p0, p1, q], [p1, p2, q], [p2, p0, q]]);
         }
     }
@@ -273,10 +277,10 @@ fn face_frames(hull: &super::hull::Hull) -> Vec<DMat3> {
         }
         on_rim.fill(false);
         for &[a, b, f, g] in &pairs {
-            if front[f as usize] != front[g as usize] {
-                on_rim[a as usize] = true;
-                on_rim[b as usize] = true;
-            }
+            // Without a branch: which edges are on the rim is data, not a pattern.
+            let rim = front[f as usize] != front[g as usize];
+            on_rim[a as usize] |= rim;
+            on_rim[b as usize] |= rim;
         }
         pts.clear();
         pts.extend(
@@ -337,51 +341,49 @@ pub fn min_area_rect_dir(poly: &[DVec2]) -> Option<DVec2> {
         2 => return (poly[1] - poly[0]).try_normalize(),
         _ => {}
     }
-    let at = |i: usize| poly[i % m];
+    // Indices stay below `m`: a wrapped successor instead of `% m`, whose integer division
+    // cost more than the rest of the loop.
+    let next = |i: usize| if i + 1 == m { 0 } else { i + 1 };
     let (mut right, mut far, mut left) = (0usize, 0usize, 0usize);
     let mut best: Option<(f64, DVec2)> = None;
     for i in 0..m {
-        let a = at(i);
-        let Some(e) = (at(i + 1) - a).try_normalize() else {
+        let a = poly[i];
+        let Some(e) = (poly[next(i)] - a).try_normalize() else {
             continue;
         };
         let nrm = e.perp();
         if i == 0 {
             // Initial pointers by a full scan; later they only advance.
-            let arg = |f: &dyn Fn(DVec2) -> f64| {
-                (0..m)
-                    .max_by(|&x, &y| f(poly[x]).total_cmp(&f(poly[y])))
-                    .unwrap_or(0)
-            };
-            right = arg(&|p| e.dot(p));
-            far = arg(&|p| nrm.dot(p));
-            left = arg(&|p| -e.dot(p));
+            let last_max = |e: Option<[usize; 2]>| e.map_or(0, |e| e[1]);
+            right = last_max(extremes(poly, |p| e.dot(p)));
+            far = last_max(extremes(poly, |p| nrm.dot(p)));
+            left = last_max(extremes(poly, |p| -e.dot(p)));
         } else {
             // Bounded advances guard against rounding on nearly collinear vertices.
             for _ in 0..m {
-                if e.dot(at(right + 1)) >= e.dot(at(right)) {
-                    right += 1;
+                if e.dot(poly[next(right)]) >= e.dot(poly[right]) {
+                    right = next(right);
                 } else {
                     break;
                 }
             }
             for _ in 0..m {
-                if nrm.dot(at(far + 1)) >= nrm.dot(at(far)) {
-                    far += 1;
+                if nrm.dot(poly[next(far)]) >= nrm.dot(poly[far]) {
+                    far = next(far);
                 } else {
                     break;
                 }
             }
             for _ in 0..m {
-                if e.dot(at(left + 1)) <= e.dot(at(left)) {
-                    left += 1;
+                if e.dot(poly[next(left)]) <= e.dot(poly[left]) {
+                    left = next(left);
                 } else {
                     break;
                 }
             }
         }
-        let width = e.dot(at(right)) - e.dot(at(left));
-        let height = nrm.dot(at(far) - a);
+        let width = e.dot(poly[right]) - e.dot(poly[left]);
+        let height = nrm.dot(poly[far] - a);
         let area = width * height;
         match best {
             Some((b, _)) if area >= b => {}
