@@ -383,7 +383,11 @@ def test_the_gil_is_released_during_a_run():
 @pytest.mark.parametrize("threads", [None, 2])
 def test_ctrl_c_stops_a_run(threads):
     import _thread
+    import signal
 
+    # Python's own Ctrl-C handler, which a process started in the background (nohup, `&` in a
+    # script) does not get: there SIGINT is ignored, and so is interrupt_main.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, _thread.interrupt_main)
     t = time.perf_counter()
     timer.start()
@@ -392,4 +396,5 @@ def test_ctrl_c_stops_a_run(threads):
             bvseg.segment(SPOT, tov=0.001, max_k=1000, threads=threads)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert time.perf_counter() - t < 20
