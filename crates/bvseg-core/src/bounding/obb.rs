@@ -341,8 +341,8 @@ pub fn min_area_rect_dir(poly: &[DVec2]) -> Option<DVec2> {
         2 => return (poly[1] - poly[0]).try_normalize(),
         _ => {}
     }
-    // Indices stay below `m`: a wrapped successor instead of `% m`, whose integer division
-    // cost more than the rest of the loop.
+    // Indices stay below `m`: a wrapped successor rather than `% m`, an integer division at
+    // every step.
     let next = |i: usize| if i + 1 == m { 0 } else { i + 1 };
     let (mut right, mut far, mut left) = (0usize, 0usize, 0usize);
     let mut best: Option<(f64, DVec2)> = None;
@@ -354,7 +354,7 @@ pub fn min_area_rect_dir(poly: &[DVec2]) -> Option<DVec2> {
         let nrm = e.perp();
         if i == 0 {
             // Initial pointers by a full scan; later they only advance.
-            let last_max = |e: Option<[usize; 2]>| e.map_or(0, |e| e[1]);
+            let last_max = |x: Option<[usize; 2]>| x.map_or(0, |[_, hi]| hi);
             right = last_max(extremes(poly, |p| e.dot(p)));
             far = last_max(extremes(poly, |p| nrm.dot(p)));
             left = last_max(extremes(poly, |p| -e.dot(p)));
