@@ -18,7 +18,7 @@ use std::collections::HashMap;
 use glam::{DMat3, DVec2, DVec3};
 
 use super::ball::{circle3_radius_below, finite_shuffled, min_circle_in_order};
-use super::extremes;
+use super::extreme_points;
 use crate::linalg::sym_eigen;
 use crate::volume::BoundingVolume;
 #[cfg(test)]
@@ -248,12 +248,7 @@ fn seeds(p: &[DVec3]) -> Vec<DVec3> {
     // The widest pair among the extreme points along the 26-DOP's axes.
     let mut ext = Vec::with_capacity(26);
     for d in dop {
-        ext.extend(
-            extremes(p, |q| q.dot(d))
-                .into_iter()
-                .flatten()
-                .map(|i| p[i]),
-        );
+        ext.extend(extreme_points(p, d));
     }
     let mut wide = (0.0, DVec3::Z);
     for i in 0..ext.len() {

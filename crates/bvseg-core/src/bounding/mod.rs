@@ -48,6 +48,15 @@ pub fn extremes<T: Copy>(items: &[T], key: impl Fn(T) -> f64) -> Option<[usize; 
     Some([lo.0, hi.0])
 }
 
+/// The points of `points` least and greatest along `d` (as [`extremes`] picks them), in that
+/// order; none for no points.
+pub fn extreme_points(points: &[DVec3], d: DVec3) -> impl Iterator<Item = DVec3> + '_ {
+    extremes(points, move |p| d.dot(p))
+        .into_iter()
+        .flatten()
+        .map(|i| points[i])
+}
+
 /// The volumes of each of `shapes` (in their order) fitted to `points`, as [`fit`] gives
 /// them; the kinds are fitted in parallel, the capsule and the cylinder as one search
 /// (see [`axial::min_capsule_and_cylinder`]).

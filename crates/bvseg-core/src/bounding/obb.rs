@@ -17,8 +17,8 @@
 use crate::math;
 use glam::{DMat3, DVec2, DVec3};
 
-use super::extremes;
 use super::hull::convex_hull;
+use super::{extreme_points, extremes};
 use crate::linalg::{orthonormalize, sym_eigen};
 use crate::volume::{BoundingVolume, Shape};
 
@@ -185,12 +185,7 @@ fn dito_frames(v: &[DVec3]) -> Vec<DMat3> {
     ];
     let mut ext: Vec<DVec3> = Vec::with_capacity(14);
     for d in DIRS.map(DVec3::from_array) {
-        ext.extend(
-            extremes(v, |p| d.dot(p))
-                .into_iter()
-                .flatten()
-                .map(|i| v[i]),
-        );
+        ext.extend(extreme_points(v, d));
     }
     let mut best = (0.0, DVec3::ZERO, DVec3::ZERO);
     for (i, &a) in ext.iter().enumerate() {
@@ -213,11 +208,7 @@ fn dito_frames(v: &[DVec3]) -> Vec<DMat3> {
     let mut tris = vec![[p0, p1, p2]];
     let n = e0.cross(p2 - p0);
     if n.length_squared() > 0.0 {
-        for q in extremes(v, |p| n.dot(p))
-            .into_iter()
-            .flatten()
-            .map(|i| v[i])
-        {
+        for q in extreme_points(v, n) {
             tris.extend([[p0, p1, q], [p1, p2, q], [p2, p0, q]]);
         }
     }
