@@ -44,7 +44,8 @@ function softwareGl() {
 }
 
 try {
-  if (softwareGl()) {
+  const software = softwareGl();
+  if (software) {
     // A software renderer draws on the CPU, beside the core: without multisampling, a frame
     // of the bundled spot costs about a third less. eframe later asks the canvas for its
     // context and gets this one.
@@ -54,7 +55,9 @@ try {
   // For scripts: window.bvseg.widgetRect('Run') -> [x, y, w, h] to click the controls, and
   // the number of threads the core runs on.
   window.bvseg = { widgetRect: viewer.widgetRect, threads };
-  await viewer.start('bvseg-canvas');
+  // On a software renderer every frame takes CPU from the core, so the threaded build shows a
+  // run's progress less often there.
+  await viewer.start('bvseg-canvas', software);
   document.getElementById('loading').remove();
 } catch (err) {
   fail(err);

@@ -23,6 +23,23 @@ pub const RATIO: u32 = 8;
 /// 500 ms it draws 8, as many as a stepped run.
 pub const NEWS_INTERVAL: Duration = Duration::from_millis(500);
 
+/// [`NEWS_INTERVAL`] when WebGL draws on the CPU (a software renderer: no GPU, or a blocked
+/// one), on the cores the run needs. There each frame that shows news cost the page's run of
+/// `spot` on 2 cores about 35 ms (its run took 2.37 s taking news every 500 ms, 2.04 s every
+/// second, 1.97 s every 2 s; BENCHMARKS.md), so the drawing would otherwise take a sixth of
+/// the run. Every 2 s, it takes about a twentieth.
+pub const SOFTWARE_NEWS_INTERVAL: Duration = Duration::from_secs(2);
+
+/// How often a frame takes the news of a run in the background, drawn by a software renderer
+/// or not.
+pub fn news_interval(software_renderer: bool) -> Duration {
+    if software_renderer {
+        SOFTWARE_NEWS_INTERVAL
+    } else {
+        NEWS_INTERVAL
+    }
+}
+
 /// The budget for a frame whose drawing and event handling take `overhead`.
 pub fn budget_for(overhead: Duration) -> Duration {
     (overhead * RATIO).clamp(MIN_BUDGET, MAX_BUDGET)
@@ -70,6 +87,13 @@ mod tests {
     use super::*;
 
     const MS: Duration = Duration::from_millis(1);
+
+    #[test]
+    fn news_come_less_often_on_a_software_renderer() {
+        assert_eq!(news_interval(false), NEWS_INTERVAL);
+        assert_eq!(news_interval(true), SOFTWARE_NEWS_INTERVAL);
+        assert!(SOFTWARE_NEWS_INTERVAL > NEWS_INTERVAL);
+    }
 
     #[test]
     fn budget_follows_the_frame_overhead_within_bounds() {

@@ -101,6 +101,7 @@ mod native {
                 Report::Done(json) => println!("{json}"),
                 Report::Error(e) => eprintln!("bvseg-viewer: error: {e}"),
             })),
+            software_renderer: false,
         };
         let options = eframe::NativeOptions {
             viewport: eframe::egui::ViewportBuilder::default()

@@ -50,9 +50,10 @@ pub fn widget_rect(label: &str) -> Option<Vec<f32>> {
 }
 
 /// Starts the viewer in the canvas with id `canvas_id`, reading `mesh`, `autorun` and `bv` from
-/// the page's query string.
+/// the page's query string. `software_renderer`: WebGL draws on the CPU (see
+/// [`StartOptions::software_renderer`]); left out, it is taken to be a GPU.
 #[wasm_bindgen]
-pub async fn start(canvas_id: String) -> Result<(), JsValue> {
+pub async fn start(canvas_id: String, software_renderer: Option<bool>) -> Result<(), JsValue> {
     let window = web_sys::window().ok_or("no window")?;
     let document = window.document().ok_or("no document")?;
     let canvas: web_sys::HtmlCanvasElement = document
@@ -85,6 +86,7 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
         autorun,
         kinds: query.get("bv"),
         reporter: Some(Box::new(report)),
+        software_renderer: software_renderer.unwrap_or(false),
     };
     runner
         .start(

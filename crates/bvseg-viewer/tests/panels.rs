@@ -23,6 +23,7 @@ fn harness(mesh: &str) -> (Harness<'static, ViewerApp>, Rc<RefCell<Vec<Report>>>
         reporter: Some(Box::new(move |r: &Report| {
             sink.borrow_mut().push(r.clone())
         })),
+        software_renderer: false,
     });
     let h = Harness::builder()
         .with_size([1280.0, 900.0])
@@ -289,7 +290,7 @@ fn the_start_kinds_are_read_as_the_cli_reads_them() {
             mesh: StartMesh::Bundled("bunny".into()),
             autorun: true,
             kinds: Some(kinds.into()),
-            reporter: None,
+            ..StartOptions::default()
         })
     };
     assert_eq!(

@@ -7,7 +7,7 @@ use eframe::egui;
 use eframe::glow;
 use web_time::{Duration, Instant};
 
-use crate::budget::{FrameBudget, NEWS_INTERVAL};
+use crate::budget::{news_interval, FrameBudget};
 use crate::camera::OrbitCamera;
 use crate::meshes::{self, BUNDLED};
 use crate::platform::{Inbox, Report, Reporter};
@@ -124,6 +124,10 @@ pub struct StartOptions {
     pub kinds: Option<String>,
     /// Told when a run ends or fails.
     pub reporter: Option<Reporter>,
+    /// WebGL draws on the CPU (the page detects a software renderer): a run in the background
+    /// then takes its news less often, as each frame costs it more (see
+    /// [`crate::budget::news_interval`]). Default `false`.
+    pub software_renderer: bool,
 }
 
 impl Default for StartOptions {
@@ -133,6 +137,7 @@ impl Default for StartOptions {
             autorun: false,
             kinds: None,
             reporter: None,
+            software_renderer: false,
         }
     }
 }
@@ -185,6 +190,8 @@ pub struct ViewerApp {
     next_frame: Option<Duration>,
     /// When the news of the run in the background was last taken.
     last_news: Option<Instant>,
+    /// How often to take it (see [`crate::budget::news_interval`]).
+    news_interval: Duration,
     #[cfg(not(target_arch = "wasm32"))]
     native: NativeDialogs,
 }
@@ -266,6 +273,7 @@ impl ViewerApp {
             budget: FrameBudget::default(),
             next_frame: None,
             last_news: None,
+            news_interval: news_interval(start.software_renderer),
             #[cfg(not(target_arch = "wasm32"))]
             native: NativeDialogs::default(),
         };
@@ -425,12 +433,12 @@ impl ViewerApp {
             // The run needs no frames; a frame that shows news costs the drawing of a few
             // (egui lays out again the panels that changed), so news is taken only so often.
             let since = self.last_news.map(|l| t0.saturating_duration_since(l));
-            if let Some(since) = since.filter(|&d| d < NEWS_INTERVAL) {
-                self.next_frame = Some(NEWS_INTERVAL - since);
+            if let Some(since) = since.filter(|&d| d < self.news_interval) {
+                self.next_frame = Some(self.news_interval - since);
                 return;
             }
             self.last_news = Some(t0);
-            self.next_frame = Some(NEWS_INTERVAL);
+            self.next_frame = Some(self.news_interval);
             s.advance(Duration::ZERO)
         } else {
             let progress = s.advance(self.budget.start(t0));
@@ -617,5 +625,36 @@ mod tests {
         assert_eq!(v["met"], serde_json::Value::Null);
         assert_eq!(v["frames"].as_u64(), Some(s.calls() as u64));
         assert_eq!(v["view"][3].as_f64(), Some(4.0));
+    }
+
+    #[test]
+    fn a_run_in_the_background_takes_news_as_often_as_the_renderer_allows() {
+        use crate::budget::{NEWS_INTERVAL, SOFTWARE_NEWS_INTERVAL};
+        for (software_renderer, interval) in
+            [(false, NEWS_INTERVAL), (true, SOFTWARE_NEWS_INTERVAL)]
+        {
+            let mut app = ViewerApp::new(StartOptions {
+                software_renderer,
+                ..StartOptions::default()
+            });
+            let mesh = app.model.as_ref().unwrap().mesh.clone();
+            // Dropped at the end of the test, the session cancels the run.
+            app.session = Some(Session::in_background(mesh, app.settings.params()));
+            app.status = Status::Running;
+            let t0 = Instant::now();
+            app.advance();
+            assert_eq!(
+                app.next_frame,
+                Some(interval),
+                "the first look takes the news"
+            );
+            app.advance();
+            let waited = t0.elapsed();
+            let next = app.next_frame.unwrap();
+            assert!(
+                next <= interval && next + waited >= interval,
+                "the next look waits out the interval: {next:?} after {waited:?}"
+            );
+        }
     }
 }
