@@ -104,11 +104,18 @@ say "wasm-opt (npm binaryen)"
 (cd web && npm ci --no-audit --no-fund --loglevel=error)
 # -O3, not -Oz: the module is well within its size budget, and speed is what the page needs.
 # The threaded module also needs `--enable-threads` (shared memory, atomics).
+# `-ocimfs 1000`: a function with one caller is inlined only if small. By default binaryen
+# inlines every such function, which made functions of up to 79 kB (the ellipsoid fit with
+# both its solvers). The browser compiles a module's hot functions again while it runs
+# (V8's optimising tier, on the same cores as the run); giant functions compile slowly, and
+# the run waits in the unoptimised code meanwhile. With the limit, the page's run of spot spent
+# 0.68-0.74 s of CPU compiling instead of 1.06-1.14 s and took 1.75-1.86 s instead of
+# 1.93-1.98 s (BENCHMARKS.md).
 for module in "$dist/bvseg_viewer_bg.wasm" ${threads_wasm:+"$dist/threads/bvseg_viewer_bg.wasm"}; do
     raw_size=$(stat -c %s "$module")
     extra=()
     if [[ "$module" == */threads/* ]]; then extra=(--enable-threads); fi
-    web/node_modules/.bin/wasm-opt -O3 \
+    web/node_modules/.bin/wasm-opt -O3 -ocimfs 1000 \
         --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
         --enable-mutable-globals --enable-reference-types --enable-multivalue --enable-simd \
         "${extra[@]}" "$module" -o "$module"

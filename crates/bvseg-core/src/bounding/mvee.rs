@@ -319,6 +319,8 @@ struct WaTy<const N: usize> {
 
 impl<const N: usize> WaTy<N> {
     /// Weights for the lifted points `q`; `K = N (N + 1) / 2`.
+    /// Not inlined in WebAssembly: see [`barrier`].
+    #[cfg_attr(target_arch = "wasm32", inline(never))]
     fn run<const K: usize>(q: &[[f64; N]], eps: f64) -> Option<Vec<f64>> {
         let core = core_set(q);
         let mut u0 = vec![0.0; q.len()];
@@ -427,6 +429,8 @@ impl<const N: usize> WaTy<N> {
 
     /// Toward and away steps on the active set until it is `eps`-primal feasible; returns the
     /// number of iterations used.
+    /// Not inlined in WebAssembly: see [`barrier`].
+    #[cfg_attr(target_arch = "wasm32", inline(never))]
     fn iterate(&mut self, eps: f64, budget: usize) -> Option<usize> {
         let n = N as f64;
         let (mut j, mut k) = self.extremes();
@@ -516,6 +520,9 @@ impl<const N: usize> WaTy<N> {
 /// cheap whatever the number of points), until the barrier's duality gap is below `gap`.
 /// Starts from the ellipsoid of weights `u0` shrunk to be strictly feasible; returns the dual
 /// weights of the central point reached. `None` on numerical failure.
+// One function each in WebAssembly, not inlined into their one caller: the browser compiles
+// the module's hot functions again while the page runs, and a giant one slowly (web/build.sh).
+#[cfg_attr(target_arch = "wasm32", inline(never))]
 fn barrier<const N: usize, const K: usize>(
     q: &[[f64; N]],
     u0: &[f64],
