@@ -108,9 +108,9 @@ say "wasm-opt (npm binaryen)"
 # inlines every such function, which made functions of up to 79 kB (the ellipsoid fit with
 # both its solvers). The browser compiles a module's hot functions again while it runs
 # (V8's optimising tier, on the same cores as the run); giant functions compile slowly, and
-# the run waits in the unoptimised code meanwhile. With the limit, the page's run of spot spent
-# 0.68-0.74 s of CPU compiling instead of 1.06-1.14 s and took 1.75-1.86 s instead of
-# 1.93-1.98 s (BENCHMARKS.md).
+# the run waits in the unoptimised code meanwhile. With the limit (and the ellipsoid's solvers
+# kept apart in the source), the page's run of spot spent 0.67-0.73 s of CPU compiling instead
+# of 1.01-1.09 s, and took 1.65-1.76 s instead of 1.86-2.03 s (BENCHMARKS.md).
 for module in "$dist/bvseg_viewer_bg.wasm" ${threads_wasm:+"$dist/threads/bvseg_viewer_bg.wasm"}; do
     raw_size=$(stat -c %s "$module")
     extra=()

@@ -1,7 +1,12 @@
 // Times the page's run of a bundled mesh, served cross-origin isolated (threads) or plainly,
 // alternating, several rounds: `node pagebench.mjs [ROUNDS] [MESH]` after web/build.sh.
+// Environment: BVSEG_DIST (the build to serve, default ../dist), PAGES=isolated or plain (only
+// that one), EXTRA (appended to the query, e.g. `&threads=1`), JSFLAGS (V8 flags, e.g.
+// `--liftoff-only`), CPU=1 (print the browser's CPU time per thread name over each page's
+// run, from /proc: the core's workers are `DedicatedWorker`, V8's background compilation
+// `ThreadPoolForeg...`, SwiftShader's drawing `Thread<NN>`).
 import { createServer } from 'node:http';
-import { mkdtempSync, readFileSync, rmSync, existsSync } from 'node:fs';
+import { mkdtempSync, readFileSync, readdirSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, extname, normalize, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -11,6 +16,38 @@ const here = dirname(fileURLToPath(import.meta.url));
 const dist = process.env.BVSEG_DIST || join(here, '..', 'dist');
 const rounds = Number(process.argv[2] || 3);
 const mesh = process.argv[3] || 'spot';
+const pages = process.env.PAGES ? process.env.PAGES.split(',') : ['isolated', 'plain'];
+
+/** CPU time (clock ticks) of each thread of the browser's processes, by `pid/tid`. */
+function browserThreads() {
+  const out = new Map();
+  for (const pid of readdirSync('/proc').filter((d) => /^\d+$/.test(d))) {
+    try {
+      if (!readFileSync(`/proc/${pid}/cmdline`, 'latin1').split('\0')[0].includes('chrom')) continue;
+      for (const tid of readdirSync(`/proc/${pid}/task`)) {
+        const st = readFileSync(`/proc/${pid}/task/${tid}/stat`, 'latin1');
+        const name = st.slice(st.indexOf('(') + 1, st.lastIndexOf(')'));
+        const f = st.slice(st.lastIndexOf(')') + 2).split(' ');
+        out.set(`${pid}/${tid}`, [name, Number(f[11]) + Number(f[12])]);
+      }
+    } catch {
+      // The process or thread ended meanwhile.
+    }
+  }
+  return out;
+}
+
+/** Seconds of CPU per thread name between two `browserThreads()` (clock ticks of 10 ms). */
+function cpuSince(before, after) {
+  const by = new Map();
+  for (const [key, [name, ticks]] of after) {
+    const d = ticks - (before.get(key)?.[1] ?? 0);
+    if (d > 0) by.set(name, (by.get(name) ?? 0) + d);
+  }
+  return [...by].sort((a, b) => b[1] - a[1]).slice(0, 6)
+    .map(([name, d]) => `${name} ${(d / 100).toFixed(2)}`).join(', ');
+}
+
 const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.wasm': 'application/wasm' };
 
 async function serve(headers) {
@@ -37,14 +74,18 @@ const context = await chromium.launchPersistentContext(profile, {
   viewport: { width: 1280, height: 800 },
   deviceScaleFactor: 1,
   args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--enable-unsafe-swiftshader'],
+    '--disable-component-update', '--disable-sync', '--no-first-run', '--enable-unsafe-swiftshader',
+    ...(process.env.JSFLAGS ? [`--js-flags=${process.env.JSFLAGS}`] : [])],
 });
 const results = { isolated: [], plain: [] };
 for (let r = 0; r < rounds; r++) {
   for (const [name, origin] of [['isolated', isolated], ['plain', plain]]) {
+    if (!pages.includes(name)) continue;
     const page = await context.newPage();
+    const before = process.env.CPU ? browserThreads() : null;
     await page.goto(`${origin}/index.html?mesh=${mesh}&autorun=1${process.env.EXTRA || ""}`);
     await page.waitForFunction(() => document.title.startsWith('bvseg: '), null, { timeout: 300_000, polling: 100 });
+    if (before) console.log(`  CPU (s): ${cpuSince(before, browserThreads())}`);
     const text = await page.locator('#bvseg-result').textContent();
     const threads = await page.evaluate(() => window.bvseg?.threads);
     const j = JSON.parse(text);
@@ -54,7 +95,7 @@ for (let r = 0; r < rounds; r++) {
   }
 }
 const median = (a) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
-console.log(`median run: isolated ${median(results.isolated).toFixed(2)} s, plain ${median(results.plain).toFixed(2)} s`);
+console.log(`median run: ${pages.map((p) => `${p} ${median(results[p]).toFixed(2)} s`).join(', ')}`);
 await context.close();
 s1.close();
 s2.close();

@@ -24,10 +24,9 @@ pub const RATIO: u32 = 8;
 pub const NEWS_INTERVAL: Duration = Duration::from_millis(500);
 
 /// [`NEWS_INTERVAL`] when WebGL draws on the CPU (a software renderer: no GPU, or a blocked
-/// one), on the cores the run needs. There each frame that shows news cost the page's run of
-/// `spot` on 2 cores about 35 ms (its run took 2.37 s taking news every 500 ms, 2.04 s every
-/// second, 1.97 s every 2 s; BENCHMARKS.md), so the drawing would otherwise take a sixth of
-/// the run. Every 2 s, it takes about a twentieth.
+/// one), on the cores the run needs. There the frames cost the page's run of `spot` on 2
+/// cores 20-45 ms each (its run took 2.37 s taking news every 500 ms, 2.04 s every second,
+/// 1.97 s every 2 s; BENCHMARKS.md): a sixth of the run at 500 ms, a few hundredths at 2 s.
 pub const SOFTWARE_NEWS_INTERVAL: Duration = Duration::from_secs(2);
 
 /// How often a frame takes the news of a run in the background, drawn by a software renderer
