@@ -104,18 +104,19 @@ say "wasm-opt (npm binaryen)"
 (cd web && npm ci --no-audit --no-fund --loglevel=error)
 # -O3, not -Oz: the module is well within its size budget, and speed is what the page needs.
 # The threaded module also needs `--enable-threads` (shared memory, atomics).
-# `-ocimfs 1000`: a function with one caller is inlined only if small. By default binaryen
+# `-ocimfs 300`: a function with one caller is inlined only if small. By default binaryen
 # inlines every such function, which made functions of up to 79 kB (the ellipsoid fit with
 # both its solvers). The browser compiles a module's hot functions again while it runs
 # (V8's optimising tier, on the same cores as the run); giant functions compile slowly, and
-# the run waits in the unoptimised code meanwhile. With the limit (and the ellipsoid's solvers
-# kept apart in the source), the page's run of spot spent 0.67-0.73 s of CPU compiling instead
-# of 1.01-1.09 s, and took 1.65-1.76 s instead of 1.86-2.03 s (BENCHMARKS.md).
+# the run waits in the unoptimised code meanwhile. With a limit of 1000 (and the ellipsoid's
+# solvers kept apart in the source), the page's run of spot spent 0.67-0.73 s of CPU compiling
+# instead of 1.01-1.09 s, and took 1.65-1.76 s instead of 1.86-2.03 s; 300 saved another
+# 0.07-0.17 s of run (BENCHMARKS.md). Smaller functions did not run slower once compiled.
 for module in "$dist/bvseg_viewer_bg.wasm" ${threads_wasm:+"$dist/threads/bvseg_viewer_bg.wasm"}; do
     raw_size=$(stat -c %s "$module")
     extra=()
     if [[ "$module" == */threads/* ]]; then extra=(--enable-threads); fi
-    web/node_modules/.bin/wasm-opt -O3 -ocimfs 1000 \
+    web/node_modules/.bin/wasm-opt -O3 -ocimfs 300 \
         --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
         --enable-mutable-globals --enable-reference-types --enable-multivalue --enable-simd \
         "${extra[@]}" "$module" -o "$module"
