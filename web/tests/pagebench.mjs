@@ -79,27 +79,30 @@ const context = await chromium.launchPersistentContext(profile, {
     '--disable-component-update', '--disable-sync', '--no-first-run', '--enable-unsafe-swiftshader',
     ...(process.env.JSFLAGS ? [`--js-flags=${process.env.JSFLAGS}`] : [])],
 });
+/** Waits for the end of the page's run and returns its summary. */
+async function result(page) {
+  await page.waitForFunction(() => document.title.startsWith('bvseg: '), null, { timeout: 300_000, polling: 100 });
+  return JSON.parse(await page.locator('#bvseg-result').textContent());
+}
+const figures = (j) => `${j.time_s.toFixed(2)} s, core ${j.core_s.toFixed(2)} s, ${j.frames} frames, k ${j.k}`;
+
 const results = { isolated: [], plain: [] };
-for (let r = 0; r < rounds; r++) {
-  for (const [name, origin] of [['isolated', isolated], ['plain', plain]]) {
-    if (!pages.includes(name)) continue;
+const served = [['isolated', isolated], ['plain', plain]].filter(([name]) => pages.includes(name));
+for (let round = 0; round < rounds; round++) {
+  for (const [name, origin] of served) {
     const page = await context.newPage();
     const before = process.env.CPU ? browserThreads() : null;
     await page.goto(`${origin}/index.html?mesh=${mesh}&autorun=1${process.env.EXTRA || ""}`);
-    await page.waitForFunction(() => document.title.startsWith('bvseg: '), null, { timeout: 300_000, polling: 100 });
+    const j = await result(page);
     if (before) console.log(`  CPU (s): ${cpuSince(before, browserThreads())}`);
-    const text = await page.locator('#bvseg-result').textContent();
     const threads = await page.evaluate(() => window.bvseg?.threads);
-    const j = JSON.parse(text);
     results[name].push(j.time_s);
-    console.log(`${name} (${threads} threads): run ${j.time_s.toFixed(2)} s, core ${j.core_s.toFixed(2)} s, ${j.frames} frames, k ${j.k}`);
+    console.log(`${name} (${threads} threads): run ${figures(j)}`);
     for (let again = 1; again <= Number(process.env.AGAIN || 0); again++) {
       await page.evaluate(() => { document.title = 'bvseg'; });
-      const r = await page.evaluate(() => Array.from(window.bvseg.widgetRect('Run') || []));
-      await page.mouse.click(r[0] + r[2] / 2, r[1] + r[3] / 2);
-      await page.waitForFunction(() => document.title.startsWith('bvseg: '), null, { timeout: 300_000, polling: 100 });
-      const j = JSON.parse(await page.locator('#bvseg-result').textContent());
-      console.log(`  run ${again + 1} on the same page: ${j.time_s.toFixed(2)} s, core ${j.core_s.toFixed(2)} s, ${j.frames} frames, k ${j.k}`);
+      const rect = await page.evaluate(() => Array.from(window.bvseg.widgetRect('Run') || []));
+      await page.mouse.click(rect[0] + rect[2] / 2, rect[1] + rect[3] / 2);
+      console.log(`  run ${again + 1} on the same page: ${figures(await result(page))}`);
     }
     await page.close();
   }

@@ -319,6 +319,7 @@ struct WaTy<const N: usize> {
 
 impl<const N: usize> WaTy<N> {
     /// Weights for the lifted points `q`; `K = N (N + 1) / 2`.
+    ///
     /// Not inlined in WebAssembly: see [`barrier`].
     #[cfg_attr(target_arch = "wasm32", inline(never))]
     fn run<const K: usize>(q: &[[f64; N]], eps: f64) -> Option<Vec<f64>> {
@@ -429,6 +430,7 @@ impl<const N: usize> WaTy<N> {
 
     /// Toward and away steps on the active set until it is `eps`-primal feasible; returns the
     /// number of iterations used.
+    ///
     /// Not inlined in WebAssembly: see [`barrier`].
     #[cfg_attr(target_arch = "wasm32", inline(never))]
     fn iterate(&mut self, eps: f64, budget: usize) -> Option<usize> {
