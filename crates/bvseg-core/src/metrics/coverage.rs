@@ -57,7 +57,8 @@ impl Coverage {
         (0..3).all(|d| r[d] >= 0 && r[d] < self.n[d]).then(|| {
             (
                 offset,
-                (r[0] + self.n[0] * (r[1] + self.n[1] * r[2])) as usize,
+                // The third index fastest: a run of cells up a column is a slice.
+                (r[2] + self.n[2] * (r[1] + self.n[1] * r[0])) as usize,
             )
         })
     }
@@ -113,7 +114,6 @@ impl Coverage {
     /// Count each cell of `cells` once more (`add`) or once less, keeping
     /// [`Coverage::union`].
     fn count_each(&mut self, cells: &Cells, add: bool) {
-        let stride = (self.n[0] * self.n[1]) as usize;
         let mut moved = 0usize;
         for &(first, len) in cells.runs() {
             // A run whose first and last cells are in range lies in the dense array whole
@@ -127,8 +127,8 @@ impl Coverage {
                 } else {
                     &mut self.count
                 };
-                for d in 0..len as usize {
-                    moved += usize::from(count(&mut counts[i0 + d * stride], add));
+                for v in &mut counts[i0..i0 + len as usize] {
+                    moved += usize::from(count(v, add));
                 }
             } else {
                 for d in 0..len {

@@ -319,21 +319,23 @@ pub fn outside_from_cells(per: &[&Cells], counts: &[f64]) -> Outside {
 }
 
 /// Number of distinct cells of one lattice (the offset one if `offset`) in `per`, marked in a
-/// bitmap over their bounding box.
+/// bitmap over their bounding box. The third index is the bitmap's fastest, so that a run of
+/// cells up a column sets whole words at a time.
 fn distinct(per: &[&Cells], offset: bool) -> usize {
-    let cells = || {
+    let runs = || {
         per.iter()
-            .flat_map(|c| c.iter())
-            .filter(move |c| c.is_offset() == offset)
-            .map(|c| c.index())
+            .flat_map(|c| c.runs())
+            .filter(move |(c, _)| c.is_offset() == offset)
+            .map(|&(c, len)| (c.index(), u64::from(len)))
     };
     let mut lo = [i64::MAX; 3];
     let mut hi = [i64::MIN; 3];
-    for c in cells() {
+    for (c, len) in runs() {
         for d in 0..3 {
             lo[d] = lo[d].min(c[d]);
             hi[d] = hi[d].max(c[d]);
         }
+        hi[2] = hi[2].max(c[2] + len as i64 - 1);
     }
     if lo[0] > hi[0] {
         return 0;
@@ -344,17 +346,23 @@ fn distinct(per: &[&Cells], offset: bool) -> usize {
         (hi[2] - lo[2] + 1) as usize,
     ];
     let mut bits = vec![0u64; (n[0] * n[1] * n[2]).div_ceil(64)];
-    let mut count = 0usize;
-    for c in cells() {
-        let idx = (c[0] - lo[0]) as usize
-            + n[0] * ((c[1] - lo[1]) as usize + n[1] * (c[2] - lo[2]) as usize);
-        let (w, b) = (idx / 64, idx % 64);
-        if bits[w] & (1 << b) == 0 {
-            bits[w] |= 1 << b;
-            count += 1;
+    for (c, len) in runs() {
+        let first = (c[2] - lo[2]) as usize
+            + n[2] * ((c[1] - lo[1]) as usize + n[1] * (c[0] - lo[0]) as usize);
+        let (mut i, end) = (first, first + len as usize);
+        while i < end {
+            let (w, b) = (i / 64, i % 64);
+            let take = (64 - b).min(end - i);
+            let mask = if take == 64 {
+                u64::MAX
+            } else {
+                ((1u64 << take) - 1) << b
+            };
+            bits[w] |= mask;
+            i += take;
         }
     }
-    count
+    bits.iter().map(|w| w.count_ones() as usize).sum()
 }
 
 #[cfg(test)]
@@ -522,6 +530,37 @@ mod tests {
             })
             .count();
         assert_eq!(offset_cells.len(), brute);
+    }
+
+    /// Runs of every length, across bitmap words and overlapping between lists and lattices,
+    /// counted as a set of cells would count them.
+    #[test]
+    fn distinct_counts_each_cell_once_whatever_its_runs() {
+        let mut rng = crate::rng::Rng::new(7);
+        for _ in 0..50 {
+            let lists: Vec<Cells> = (0..3)
+                .map(|_| {
+                    let mut c = Cells::default();
+                    for _ in 0..rng.below(12) {
+                        let (i, j) = (rng.below(4) as i64 - 2, rng.below(3) as i64);
+                        let a = rng.below(150) as i64 - 40;
+                        let b = a + rng.below(140) as i64 - 2;
+                        c.push_run(rng.below(2) == 1, [i, j], [a, b]);
+                    }
+                    c
+                })
+                .collect();
+            let per: Vec<&Cells> = lists.iter().collect();
+            for offset in [false, true] {
+                let brute: std::collections::HashSet<[i64; 3]> = lists
+                    .iter()
+                    .flat_map(Cells::iter)
+                    .filter(|c| c.is_offset() == offset)
+                    .map(|c| c.index())
+                    .collect();
+                assert_eq!(distinct(&per, offset), brute.len());
+            }
+        }
     }
 
     #[test]
