@@ -106,6 +106,11 @@ pub struct ParamArgs {
     #[arg(long)]
     pub no_polish: bool,
 
+    /// JSON output: leave the bounding-volume hierarchy empty instead of building it (about a
+    /// sixth of a default run's time).
+    #[arg(long)]
+    pub no_hierarchy: bool,
+
     /// Exit with code 3 when the tolerances are not met within --max-k.
     #[arg(long)]
     pub strict: bool,
@@ -171,7 +176,7 @@ impl ParamArgs {
             merge: !self.no_merge,
             polish: !self.no_polish,
             margin: self.margin,
-            hierarchy: formats.iter().any(|f| f.carries_hierarchy()),
+            hierarchy: !self.no_hierarchy && formats.iter().any(|f| f.carries_hierarchy()),
             ..Params::default()
         };
         params.validate()?;

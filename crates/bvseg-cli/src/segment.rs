@@ -382,6 +382,8 @@ mod tests {
             OutputFormat::Obj
         ]));
         assert!(with(&[OutputFormat::Glb, OutputFormat::Json]));
+        let without = parse(&["--no-hierarchy"]).unwrap().params;
+        assert!(!without.params(&[OutputFormat::Json]).unwrap().hierarchy);
     }
 
     #[test]

@@ -59,6 +59,8 @@ fn every_output_format_in_one_run() {
         serde_json::from_str(&fs::read_to_string(dir.join("v.json")).unwrap()).unwrap();
     let vols = doc["volumes"].as_array().unwrap();
     assert_eq!(vols.len(), 3);
+    // Three leaves and two inner nodes.
+    assert_eq!(doc["hierarchy"].as_array().unwrap().len(), 5);
     // MJCF: one geom per volume, sizes equal to the JSON radii.
     let xml = fs::read_to_string(dir.join("v.xml")).unwrap();
     let x = roxmltree::Document::parse(&xml).unwrap();
@@ -105,6 +107,36 @@ fn every_output_format_in_one_run() {
         svg.starts_with("<svg") && svg.contains("<polyline") && svg.trim_end().ends_with("</svg>")
     );
     roxmltree::Document::parse(&svg).unwrap();
+}
+
+/// `--no-hierarchy` leaves the JSON's hierarchy empty and every other field as it was.
+#[test]
+fn no_hierarchy_empties_only_the_hierarchy() {
+    let dir = scratch("no_hierarchy_empties_only_the_hierarchy");
+    let run = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "segment",
+            BUNNY,
+            "--samples",
+            "2000",
+            "--k",
+            "4",
+            "-q",
+            "-o",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        let o = bvseg(&dir, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = fs::read_to_string(dir.join(out)).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let mut with = run("with.json", &[]);
+    let without = run("without.json", &["--no-hierarchy"]);
+    assert_eq!(with["hierarchy"].as_array().unwrap().len(), 7);
+    assert_eq!(without["hierarchy"], serde_json::json!([]));
+    with["hierarchy"] = serde_json::json!([]);
+    assert_eq!(with, without);
 }
 
 #[test]
