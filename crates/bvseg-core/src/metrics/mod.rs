@@ -353,12 +353,7 @@ fn distinct(per: &[&Cells], offset: bool) -> usize {
         while i < end {
             let (w, b) = (i / 64, i % 64);
             let take = (64 - b).min(end - i);
-            let mask = if take == 64 {
-                u64::MAX
-            } else {
-                ((1u64 << take) - 1) << b
-            };
-            bits[w] |= mask;
+            bits[w] |= (u64::MAX >> (64 - take)) << b;
             i += take;
         }
     }
