@@ -27,6 +27,43 @@ pub enum Error {
     /// The run was stopped through its [`crate::Cancel`] flag.
     #[error("the run was cancelled")]
     Cancelled,
+    /// The mesh's rig (skeleton or skin) is malformed.
+    #[error(transparent)]
+    Rig(#[from] RigError),
+}
+
+/// A rig that [`crate::Rig::validate`] (and so [`crate::Mesh::with_rig`]) rejects.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum RigError {
+    /// A joint's parent is not a joint.
+    #[error("joint {joint}'s parent {parent} is not a joint (the skeleton has {count})")]
+    Parent {
+        /// The joint.
+        joint: usize,
+        /// Its parent index.
+        parent: usize,
+        /// Number of joints.
+        count: usize,
+    },
+    /// The parents form a cycle.
+    #[error("the skeleton's parents form a cycle through joint `{joint}`; each joint needs one root above it")]
+    Cycle {
+        /// A joint on the cycle.
+        joint: String,
+    },
+    /// A joint's rest matrix is not finite or not invertible.
+    #[error("joint {joint}'s rest matrix is not finite or not invertible")]
+    BadJoint {
+        /// The joint.
+        joint: usize,
+    },
+    /// The skin does not fit the mesh or the skeleton.
+    #[error("the skin is malformed: {message}")]
+    Skin {
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// A mesh that [`crate::Mesh::new`] rejects.

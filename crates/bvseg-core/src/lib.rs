@@ -62,6 +62,7 @@ mod pipeline;
 mod refine;
 mod reshaping;
 mod result;
+mod rig;
 mod rng;
 mod sampling;
 pub mod shapes;
@@ -69,12 +70,15 @@ mod tightening;
 mod volume;
 
 pub use cancel::Cancel;
-pub use error::{Error, MeshError, ParamError};
+pub use error::{Error, MeshError, ParamError, RigError};
 pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
-pub use params::{Params, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES};
+pub use params::{
+    Params, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES,
+};
 pub use pipeline::Segmenter;
 pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, BUDGET_WARNING};
+pub use rig::{Joint, Pose, Rig, Skeleton, Skin};
 pub use volume::{BoundingVolume, Polytope, Shape};
 
 /// The stages' own entry points, for the benchmarks, the fuzz targets and the tests that

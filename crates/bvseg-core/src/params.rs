@@ -89,6 +89,26 @@ pub struct Params {
     /// Default `true`; the CLI turns it off when no output it writes carries the hierarchy
     /// (only the JSON document does).
     pub hierarchy: bool,
+    /// Where the start's seeds come from (the paper's section 6.1): [`SkeletonMode::Rig`]
+    /// (the default) seeds one part per link of the mesh's [`crate::Skeleton`] when it has
+    /// one, and binds every part to a bone; [`SkeletonMode::Auto`] computes an approximate
+    /// curve skeleton of the solid first; [`SkeletonMode::None`] ignores any skeleton.
+    pub skeleton: SkeletonMode,
+}
+
+/// Where the initial partition's seeds come from (see [`Params::skeleton`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum SkeletonMode {
+    /// The mesh's own skeleton ([`crate::Mesh::rig`]) when it has one with a link; otherwise
+    /// as [`SkeletonMode::None`].
+    #[default]
+    Rig,
+    /// An approximate curve skeleton computed from the solid's interior samples.
+    Auto,
+    /// No skeleton: the tolerance mode grows parts from one per piece of the solid, a fixed
+    /// k starts from a CVT.
+    None,
 }
 
 impl Default for Params {
@@ -109,6 +129,7 @@ impl Default for Params {
             max_sweeps: 100,
             margin: 0.0,
             hierarchy: true,
+            skeleton: SkeletonMode::Rig,
         }
     }
 }

@@ -18,6 +18,10 @@ pub struct Part {
     /// The largest distance to the mesh surface of the points of this part's volume on the
     /// union's boundary, in mesh units (0 when the other volumes cover all of it).
     pub protrusion: f64,
+    /// The joint of the mesh's [`crate::Skeleton`] the volume moves with (an index into
+    /// [`crate::Skeleton::joints`]), `None` without a skeleton. At a pose where that joint's
+    /// world matrix is `G(t)`, the volume is `G(t) * rest⁻¹` applied to [`Part::volume`].
+    pub bone: Option<usize>,
 }
 
 /// Summary figures of a segmentation, measured on the sampling lattice.

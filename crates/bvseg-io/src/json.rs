@@ -277,6 +277,7 @@ mod tests {
                 ov: 0.2,
                 e: 1.0,
                 protrusion: 0.05,
+                bone: None,
             },
             Part {
                 volume: volume(Shape::Obb, 1.0),
@@ -285,6 +286,7 @@ mod tests {
                 ov: 0.1,
                 e: 1.127,
                 protrusion: 0.02,
+                bone: None,
             },
         ];
         Segmentation {

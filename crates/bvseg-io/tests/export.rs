@@ -24,6 +24,7 @@ fn with_volume(volume: BoundingVolume) -> Part {
         ov: 0.1,
         e: 1.0,
         protrusion: 0.1,
+        bone: None,
     }
 }
 

@@ -5,9 +5,11 @@ mod weld;
 pub(crate) use weld::edges_balance;
 pub use weld::weld;
 
+use std::sync::Arc;
+
 use glam::{DVec3, Vec3};
 
-use crate::MeshError;
+use crate::{MeshError, Rig, RigError};
 
 /// Coordinates beyond this magnitude are rejected: products of three of them (volumes) must
 /// stay far from f64 overflow.
@@ -19,6 +21,7 @@ pub const MAX_COORDINATE: f64 = 1e100;
 pub struct Mesh {
     vertices: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
+    rig: Option<Arc<Rig>>,
 }
 
 impl Mesh {
@@ -51,7 +54,25 @@ impl Mesh {
         Ok(Self {
             vertices,
             triangles,
+            rig: None,
         })
+    }
+
+    /// The mesh with a rig: a skeleton to seed parts from and, for a skinned mesh, the poses
+    /// its volumes must follow ([`Rig`]). The mesh's vertices are the rest pose.
+    ///
+    /// # Errors
+    ///
+    /// [`Rig::validate`]'s, against this mesh's vertex and triangle counts.
+    pub fn with_rig(mut self, rig: Rig) -> Result<Self, RigError> {
+        rig.validate(self.vertices.len(), self.triangles.len())?;
+        self.rig = Some(Arc::new(rig));
+        Ok(self)
+    }
+
+    /// The mesh's rig, if it has one.
+    pub fn rig(&self) -> Option<&Rig> {
+        self.rig.as_deref()
     }
 
     /// Like [`Mesh::new`] from single-precision positions, as most engines store them.

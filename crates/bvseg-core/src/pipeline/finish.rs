@@ -144,6 +144,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             ov: cur.ov[i],
             e: cur.part.e(i),
             protrusion: cur.pr[i],
+            bone: None,
         })
         .collect();
     let hierarchy = if ctx.params.hierarchy {
