@@ -97,6 +97,11 @@ impl Skeleton {
 /// One sampled pose of a skinned mesh.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pose {
+    /// Which animation the pose is of (poses of one animation are listed in time order, so
+    /// that the segmentation can bound how far a point moves between two of them).
+    pub animation: usize,
+    /// The time of the pose in its animation, in seconds.
+    pub time: f64,
     /// Each joint's world matrix in this pose (one per [`Skeleton::joints`]).
     pub joints: Vec<DMat4>,
     /// The posed positions of [`Skin::corners`]'s vertices.
