@@ -59,6 +59,7 @@ mod parallel;
 mod params;
 mod partition;
 mod pipeline;
+mod posing;
 mod refine;
 mod reshaping;
 mod result;
@@ -66,6 +67,7 @@ mod rig;
 mod rng;
 mod sampling;
 pub mod shapes;
+mod skeleton;
 mod tightening;
 mod volume;
 

@@ -5,7 +5,10 @@ use crate::fitting::{Fit, Fitter};
 use crate::partition::{Partition, Solid};
 use crate::refine::budget::{distance_budget, work_budget};
 use crate::refine::Tolerances;
-use crate::{Cancel, Mesh, Params};
+use crate::skeleton::auto::curve_skeleton;
+use crate::skeleton::bones::Votes;
+use crate::skeleton::{links, Link};
+use crate::{Cancel, Mesh, Params, SkeletonMode};
 
 /// The mesh, its sampled solid (with its connected pieces), the parameters and the run's
 /// cancel flag, read by every stage; and the one thing the stages share mutably, the fitter
@@ -18,6 +21,12 @@ pub(crate) struct Context {
     pub cancel: Cancel,
     /// The diagonal of the mesh's bounding box: the protrusion tolerance is relative to it.
     pub diagonal: f64,
+    /// The links that seed the start (see [`crate::skeleton::seeds`]); empty for the
+    /// unseeded start.
+    pub seeds: Vec<Link>,
+    /// The samples' votes for the bones of the mesh's rig, when it has a skeleton: every part
+    /// is then bound to a bone (see [`crate::skeleton::bones`]).
+    pub votes: Option<Votes>,
 }
 
 impl Context {
@@ -33,6 +42,23 @@ impl Context {
             cancel.clone(),
         );
         let (lo, hi) = mesh.bbox();
+        let rig = mesh.rig().filter(|r| !r.skeleton.joints.is_empty());
+        let seeds = match params.skeleton {
+            SkeletonMode::Rig => rig.map(|r| links(&r.skeleton, &solid)).unwrap_or_default(),
+            SkeletonMode::Auto => links(&curve_skeleton(&solid), &solid),
+            SkeletonMode::None => Vec::new(),
+        };
+        let votes = rig.map(|r| {
+            let own = links(&r.skeleton, &solid);
+            Votes::new(
+                mesh,
+                &solid,
+                fitter.enclosure(),
+                &own,
+                r.skin.as_ref(),
+                r.skeleton.joints.len(),
+            )
+        });
         Self {
             diagonal: (hi - lo).length(),
             mesh: mesh.clone(),
@@ -40,6 +66,16 @@ impl Context {
             params: params.clone(),
             fitter,
             cancel,
+            seeds,
+            votes,
+        }
+    }
+
+    /// The bone of each part of `part` (all `None` without a rig).
+    pub fn bones(&self, part: &Partition) -> Vec<Option<usize>> {
+        match &self.votes {
+            Some(v) => v.bones(&part.labels, part.k()),
+            None => vec![None; part.k()],
         }
     }
 

@@ -4,6 +4,7 @@ use glam::DVec3;
 
 use super::{Context, State};
 use crate::metrics::{outside_from_cells, outside_volumes, Cells};
+use crate::posing::posed_volumes;
 use crate::refine::budget::work_budget;
 use crate::reshaping::reshape;
 use crate::tightening::{relieve_worst, tighten, Passes};
@@ -42,7 +43,11 @@ pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
     } else {
         cur
     };
-    let cur = if polish && !out_of_work(ctx) {
+    // Volumes that follow an animation are fitted anew over its poses; reshaping them at
+    // rest first would be wasted.
+    let cur = if let Some(cur) = posed(ctx, &cur) {
+        cur
+    } else if polish && !out_of_work(ctx) {
         reshaped(ctx, cur)
     } else {
         cur
@@ -116,6 +121,26 @@ fn reshaped(ctx: &Context, cur: State) -> State {
     cur.with_volumes(volumes, o)
 }
 
+/// For a mesh whose rig has poses, `cur` with each volume fitted to follow its bone (see
+/// [`crate::posing`]), measured again at rest; `None` for any other mesh.
+fn posed(ctx: &Context, cur: &State) -> Option<State> {
+    let rig = ctx.mesh.rig()?;
+    let skin = rig.skin.as_ref().filter(|s| !s.poses.is_empty())?;
+    let bones = ctx.bones(&cur.part);
+    let volumes = posed_volumes(ctx, cur, &bones, &rig.skeleton, skin);
+    let o = outside_volumes(&ctx.solid.grid, &volumes, &cur.part.counts());
+    Some(cur.clone().with_volumes(volumes, o))
+}
+
+/// Whether the volumes of a run on this mesh follow an animation, each with its own bone:
+/// a hierarchy of them would bound nothing in any other pose than the rest.
+fn follows_animation(ctx: &Context) -> bool {
+    ctx.mesh
+        .rig()
+        .and_then(|r| r.skin.as_ref())
+        .is_some_and(|s| !s.poses.is_empty())
+}
+
 /// `cur` with every volume grown by the margin ([`crate::Params::margin`]), measured again.
 fn with_margin(ctx: &Context, cur: State) -> State {
     let margin = ctx.params.margin;
@@ -136,6 +161,7 @@ fn with_margin(ctx: &Context, cur: State) -> State {
 pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation {
     let k = cur.part.k();
     let n = ctx.solid.len() as f64;
+    let bones = ctx.bones(&cur.part);
     let parts: Vec<Part> = (0..k)
         .map(|i| Part {
             volume: cur.volumes[i].clone(),
@@ -144,10 +170,10 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             ov: cur.ov[i],
             e: cur.part.e(i),
             protrusion: cur.pr[i],
-            bone: None,
+            bone: bones[i],
         })
         .collect();
-    let hierarchy = if ctx.params.hierarchy {
+    let hierarchy = if ctx.params.hierarchy && !follows_animation(ctx) {
         hierarchy_of(ctx, cur)
     } else {
         Vec::new()

@@ -32,6 +32,7 @@ use crate::refine::patience::MovPatience;
 use crate::refine::split::{Split, SplitStep};
 use crate::refine::{merge, Aim, Tolerances};
 use crate::sampling::Grid;
+use crate::skeleton::seeds::seeded_partition;
 use crate::tightening::tighten;
 use crate::{
     BoundingVolume, Cancel, Error, HierarchyNode, Mesh, Params, Segmentation, Step, StepKind,
@@ -228,11 +229,19 @@ impl Segmenter {
         Ok(r)
     }
 
-    /// Initial partition: one part per piece of the solid (or k), optimised.
+    /// Initial partition, optimised: one part per link of the skeleton when there is one (in
+    /// tolerance mode), else one part per piece of the solid (or k).
     fn start(&mut self) -> Step {
         let p = &self.ctx.params;
-        let k = p.k.unwrap_or(self.ctx.solid.pieces.min(p.max_k));
-        let part = initial_partition(&self.ctx.solid, k, p.seed, p.max_sweeps);
+        let seeded = match p.k {
+            None => seeded_partition(&self.ctx.solid, &self.ctx.seeds, p.max_sweeps)
+                .filter(|part| part.k() <= p.max_k),
+            Some(_) => None,
+        };
+        let part = seeded.unwrap_or_else(|| {
+            let k = p.k.unwrap_or(self.ctx.solid.pieces.min(p.max_k));
+            initial_partition(&self.ctx.solid, k, p.seed, p.max_sweeps)
+        });
         let s = State::evaluate(&mut self.ctx, part);
         self.phase = if self.ctx.params.k.is_some() {
             Phase::Final

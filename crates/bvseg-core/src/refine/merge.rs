@@ -5,7 +5,8 @@
 //! worst part into a neighbour often fixes it where splitting cannot (a small part's outside
 //! volume is large relative to its own volume): [`relieving`]. Pairs are those that touch, and
 //! those whose volumes' boxes overlap (separate pieces of the solid, such as a teddy's eyes,
-//! touch nothing); a merge must leave the part connected within each piece of the solid.
+//! touch nothing); a merge must leave the part connected within each piece of the solid, and
+//! with a rig, both parts must be bound to the same bone.
 use glam::DVec3;
 
 use super::{Figures, Tolerances};
@@ -38,6 +39,12 @@ pub fn pairs(ctx: &Context, s: &State) -> Vec<(u32, u32)> {
     pairs.extend(overlapping(&boxes));
     pairs.sort_unstable();
     pairs.dedup();
+    if ctx.votes.is_some() {
+        // Parts bound to different bones move apart when the rig moves: merged, one of
+        // them would have to be bounded over the other's whole motion.
+        let bones = ctx.bones(&s.part);
+        pairs.retain(|&(a, b)| bones[a as usize] == bones[b as usize]);
+    }
     connected_merges(
         &ctx.solid.grid,
         &s.part.labels,

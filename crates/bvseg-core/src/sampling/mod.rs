@@ -12,6 +12,7 @@
 //! surfaces pass through its cell centres far more often than chance: counted there alone,
 //! the outside volume of boxes around thin slabs came out up to 20 % below an independent
 //! measurement. The metrics count both lattices (see [`crate::metrics`]).
+pub mod distance;
 pub mod inside;
 mod runs;
 mod shells;

@@ -1,0 +1,118 @@
+//! Volumes that follow the animation: for a skinned mesh, each part's volume is fitted in
+//! its bone's frame to enclose its triangles in the rest pose and in every sampled pose.
+//!
+//! At a pose where the bone's world matrix is `G(t)`, a volume `V` given in the rest pose
+//! moves to `G(t) · G(rest)⁻¹ · V`. It encloses a triangle's corners `x(t)` there exactly
+//! when `V` encloses `G(rest) · G(t)⁻¹ · x(t)`: so each part's volume is fitted, with the
+//! run's kinds, to its rest points (samples, shared faces, corners) and to its triangles'
+//! corners of every pose carried back into the rest pose by its bone. A convex volume that
+//! holds a triangle's three corners holds the triangle, so the surface between vertices
+//! stays covered in every sampled pose.
+//!
+//! Between two sampled times a corner moves along a curve, not along the straight line
+//! between its two samples that the volume holds. How far the curve strays is estimated
+//! from the samples themselves: for three consecutive poses of one animation, the middle
+//! sample's distance from the line between the outer two is what a chord of twice the step
+//! misses, about four times what a chord of one step does; each volume is grown by half of
+//! the largest such distance among its corners, twice that estimate. This is exact at the
+//! sampled times and holds between them for motions as smooth as their sampling resolves
+//! (the reader samples every key and enough times between keys: see `bvseg-io`).
+use glam::{DMat4, DVec3};
+
+use crate::bounding::hull::hull_points;
+use crate::pipeline::{Context, State};
+use crate::{BoundingVolume, Skeleton, Skin};
+
+/// Each part's volume for a skinned mesh (see the module's docs): `bones[i]` is part `i`'s
+/// bone; a part without bone or triangles keeps its rest volume.
+pub fn posed_volumes(
+    ctx: &Context,
+    cur: &State,
+    bones: &[Option<usize>],
+    skeleton: &Skeleton,
+    skin: &Skin,
+) -> Vec<BoundingVolume> {
+    let k = cur.part.k();
+    let mut tris: Vec<Vec<u32>> = vec![Vec::new(); k];
+    for (t, &p) in ctx
+        .fitter
+        .enclosure()
+        .triangle_parts(&cur.part.labels)
+        .iter()
+        .enumerate()
+    {
+        tris[p as usize].push(t as u32);
+    }
+    let parts: Vec<usize> = (0..k).collect();
+    crate::parallel::map(&parts, |&i| {
+        let rest = &cur.volumes[i];
+        let Some(b) = bones[i] else {
+            return rest.clone();
+        };
+        if tris[i].is_empty() || skin.poses.is_empty() {
+            return rest.clone();
+        }
+        let mut corners: Vec<u32> = tris[i]
+            .iter()
+            .flat_map(|&t| skin.corners[t as usize])
+            .collect();
+        corners.sort_unstable();
+        corners.dedup();
+        let back: Vec<DMat4> = skin
+            .poses
+            .iter()
+            .map(|p| skeleton.joints[b].rest * p.joints[b].inverse())
+            .collect();
+        let mut points = cur.fits[i].hull.clone();
+        points.reserve(corners.len() * skin.poses.len());
+        for (p, m) in skin.poses.iter().zip(&back) {
+            points.extend(
+                corners
+                    .iter()
+                    .map(|&c| m.transform_point3(p.vertices[c as usize])),
+            );
+        }
+        let margin = between_samples(skin, &back, &corners);
+        let hull = hull_points(&points);
+        let v = ctx.fitter.fit_points(&ctx.solid, &hull);
+        if margin > 0.0 {
+            v.grown(margin)
+        } else {
+            v
+        }
+    })
+}
+
+/// Half the largest distance of a corner's sample in a pose from the segment between its
+/// samples in the poses before and after it (of the same animation), all carried back by
+/// the matrices `back` (see the module's docs).
+fn between_samples(skin: &Skin, back: &[DMat4], corners: &[u32]) -> f64 {
+    let poses = &skin.poses;
+    let mut worst = 0.0f64;
+    for i in 1..poses.len().saturating_sub(1) {
+        let (a, m, b) = (&poses[i - 1], &poses[i], &poses[i + 1]);
+        if a.animation != m.animation || b.animation != m.animation {
+            continue;
+        }
+        for &c in corners {
+            let c = c as usize;
+            let x0 = back[i - 1].transform_point3(a.vertices[c]);
+            let x1 = back[i].transform_point3(m.vertices[c]);
+            let x2 = back[i + 1].transform_point3(b.vertices[c]);
+            worst = worst.max(segment_distance(x1, x0, x2));
+        }
+    }
+    0.5 * worst
+}
+
+/// Distance from `p` to the segment `[a, b]`.
+fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let d = b - a;
+    let len2 = d.length_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + t * d)).length()
+}
