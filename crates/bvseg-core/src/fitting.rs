@@ -94,8 +94,9 @@ struct FitCache {
 /// [`Fit::contenders`]): parts with almost none differ by a handful of cells.
 const FEW_CELLS: f64 = 4.0;
 
-/// Memory budget of one cache generation. Runs of the default size never fill it; a million
-/// samples of the bunny at k = 64 peak at 412 MB with it, 454 MB with 96 MB.
+/// Memory budget of one cache generation. Runs of the default size never fill it; at a million
+/// samples a larger one raised the peak memory for no gain in time (BENCHMARKS.md has the
+/// peaks of such runs today).
 const CACHE_BYTES: usize = 64 << 20;
 
 impl Fit {

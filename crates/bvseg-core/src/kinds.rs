@@ -79,8 +79,8 @@ impl Kinds {
 }
 
 impl Default for Kinds {
-    /// [`Kinds::PRIMITIVES`]: on the shared meshes the tightest of the primitive sets (see
-    /// BENCHMARKS.md).
+    /// [`Kinds::PRIMITIVES`]: on the shared meshes the tightest of the primitive sets
+    /// (BENCHMARKS.md judges each kind against k).
     fn default() -> Self {
         Kinds::PRIMITIVES
     }

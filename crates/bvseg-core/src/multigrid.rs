@@ -17,9 +17,9 @@ use crate::partition::{Partition, Solid};
 pub const MULTIGRID_MIN: usize = 400_000;
 
 /// Lloyd sweeps on a lattice whose start was carried from a coarser one, where the
-/// boundaries only have to settle. On the bunny at a million samples and k = 64, 8 sweeps
-/// left TOV 2.4 % above the direct start's and 16 or 40 sweeps 1.3 %, in 9.8 s, 9.6 s and
-/// 12.4 s against 19.9 s; see BENCHMARKS.md for more meshes.
+/// boundaries only have to settle. Half as many left TOV measurably above the direct start's;
+/// more cost time for no gain (measured at a million samples when chosen: the commit that set
+/// it has the figures; BENCHMARKS.md times such runs today).
 const FINE_SWEEPS: usize = 16;
 
 /// The CVT start of `k` parts (seeded by `seed`) optimised with up to `max_sweeps` Lloyd

@@ -23,7 +23,7 @@
 //! covers more of its own but less that no other volume covers.
 //!
 //! Real parts are rarely pieces of straight cylinders: on the shared meshes the gain is a few
-//! per cent of TOV at k = 32, up to 16 % on the chair's bars and slabs (see BENCHMARKS.md).
+//! per cent of TOV at k = 32, most on furniture's bars and slabs.
 use glam::{DMat3, DQuat, DVec3};
 
 use std::sync::atomic::{AtomicU64, Ordering};

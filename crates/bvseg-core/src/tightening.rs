@@ -26,7 +26,7 @@ const REACH: f64 = 1.15;
 /// How much more than the chosen kind's outside cells (as a fraction of them) another kind
 /// of a part may have and still be fitted to the part's moves (see [`kind`]). On the 21
 /// shared meshes, 0.5 left the judge's TOV and protrusion as they were with every kind
-/// (medians), 0.25 did not (see BENCHMARKS.md).
+/// (medians), 0.25 did not (measured when chosen: the commit that set it has the figures).
 const CONTENTION: f64 = 0.5;
 
 /// A pass that lowers TOV by less than this ends the tightening.

@@ -12,8 +12,8 @@ use web_time::{Duration, Instant};
 pub const MIN_BUDGET: Duration = Duration::from_millis(30);
 /// The largest budget: a frame at least about three times a second.
 pub const MAX_BUDGET: Duration = Duration::from_millis(300);
-/// Core work per unit of frame overhead. At 4 (and 200 ms at most), the page's run of the
-/// bundled `fourleg_2` spent 1.1 s of its 6.7 s drawing 11 frames in a software renderer.
+/// Core work per unit of frame overhead. Half of it (and 200 ms at most) left a sixth of the
+/// page's run to drawing in a software renderer.
 pub const RATIO: u32 = 8;
 
 /// How often a frame takes the news of a run in the background (the page's threaded build),
@@ -24,9 +24,9 @@ pub const RATIO: u32 = 8;
 pub const NEWS_INTERVAL: Duration = Duration::from_millis(500);
 
 /// [`NEWS_INTERVAL`] when WebGL draws on the CPU (a software renderer: no GPU, or a blocked
-/// one), on the cores the run needs. There the frames cost the page's run of `spot` on 2
-/// cores 20-45 ms each (its run took 2.37 s taking news every 500 ms, 2.04 s every second,
-/// 1.97 s every 2 s; BENCHMARKS.md): a sixth of the run at 500 ms, a few hundredths at 2 s.
+/// one), on the cores the run needs. There each frame costs tens of milliseconds of the
+/// cores: taking news every 500 ms left a sixth of the page's run to drawing, every 2 s a few
+/// hundredths.
 pub const SOFTWARE_NEWS_INTERVAL: Duration = Duration::from_secs(2);
 
 /// How often a frame takes the news of a run in the background, drawn by a software renderer

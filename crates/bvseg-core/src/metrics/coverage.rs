@@ -22,8 +22,8 @@ pub struct Coverage {
 impl Coverage {
     /// An empty coverage over the solid's lattices with a margin of a quarter of their size
     /// around them (cells beyond, where only volumes far larger than their parts reach, fall
-    /// back to a hash map). Its arrays take 3.4 times as many cells as the lattice; with
-    /// half the size around them it was 8 (132 MB at a million samples of the bunny).
+    /// back to a hash map). Its arrays take 3.4 times as many cells as the lattice, against 8
+    /// with half the size around them.
     pub fn new(solid: &Solid) -> Self {
         let d = solid.grid.dims;
         let m = [
