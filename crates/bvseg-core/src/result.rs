@@ -135,6 +135,9 @@ pub struct Segmentation {
     /// work would have made them tighter. Happens on solids of many specks scattered over a
     /// large box, not on ordinary models. [`BUDGET_WARNING`] says it in words.
     pub budget_exhausted: bool,
+    /// The skeleton the parts' [`Part::bone`]s index (the mesh's rig's), `None` when the
+    /// mesh has no rig.
+    pub skeleton: Option<crate::Skeleton>,
 }
 
 /// What the front ends (the CLI, the Python package) warn when

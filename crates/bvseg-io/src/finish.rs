@@ -45,6 +45,9 @@ pub struct LoadedMesh {
     /// degenerate, in increasing order: with them, per-triangle results can be mapped back
     /// to the file's triangles.
     pub dropped: Vec<usize>,
+    /// What a skinned glTF file holds (joints, skins, animations, sampled poses); `None`
+    /// for any other file. The mesh then carries its rig ([`bvseg_core::Mesh::rig`]).
+    pub character: Option<crate::CharacterInfo>,
 }
 
 impl LoadedMesh {
@@ -206,6 +209,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
         },
         report,
         dropped,
+        character: None,
     })
 }
 

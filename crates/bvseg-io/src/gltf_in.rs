@@ -64,6 +64,7 @@ pub(crate) fn read_gltf(
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| err(name, "the document has no scene"))?;
+    let mut character = crate::character::Character::new(&doc, &buffers, name)?;
     let mut raw = RawMesh::default();
     let mut found = mesh.is_none();
     // Depth-first over the node tree with world matrices in f64.
@@ -105,7 +106,8 @@ pub(crate) fn read_gltf(
                     }
                 }
                 for prim in m.primitives() {
-                    read_primitive(&prim, &world, &buffers, &mut raw, name)?;
+                    let place = character.as_mut().map(|c| (c, &node));
+                    read_primitive(&prim, &world, place, &buffers, &mut raw, name)?;
                 }
             }
         }
@@ -123,7 +125,24 @@ pub(crate) fn read_gltf(
             ),
         ));
     }
-    finish(raw, name)
+    let Some(character) = character else {
+        return finish(raw, name);
+    };
+    let (positions, triangles) = (raw.positions.clone(), raw.triangles.clone());
+    let mut loaded = finish(raw, name)?;
+    let (rig, info) = character.rig(
+        &doc,
+        &positions,
+        &triangles,
+        &loaded.dropped,
+        loaded.report.flipped,
+    );
+    loaded.mesh = loaded
+        .mesh
+        .with_rig(rig)
+        .map_err(|e| err(name, e.to_string()))?;
+    loaded.character = Some(info);
+    Ok(loaded)
 }
 
 /// Parses and validates the JSON document. The index checks of the validation are what
@@ -383,7 +402,7 @@ fn local_matrix(node: &gltf::Node) -> DMat4 {
 
 /// The bytes of accessor `acc`'s elements: (data, offset of the first element, stride),
 /// after checking that all `count` elements of `elem` bytes lie inside the view and buffer.
-fn accessor_bytes<'b>(
+pub(crate) fn accessor_bytes<'b>(
     acc: &gltf::Accessor,
     elem: usize,
     buffers: &'b [Vec<u8>],
@@ -431,6 +450,7 @@ fn accessor_bytes<'b>(
 fn read_primitive(
     prim: &gltf::Primitive,
     world: &DMat4,
+    place: Option<(&mut crate::character::Character, &gltf::Node)>,
     buffers: &[Vec<u8>],
     raw: &mut RawMesh,
     name: &str,
@@ -467,10 +487,35 @@ fn read_primitive(
         ));
     }
     raw.positions.reserve(n);
-    for k in 0..n {
+    let local = (0..n).map(|k| {
         let o = off + k * stride;
-        let p = DVec3::new(f(o), f(o + 4), f(o + 8));
-        raw.positions.push(world.transform_point3(p));
+        DVec3::new(f(o), f(o + 4), f(o + 8))
+    });
+    // A skinned mesh is where its skin puts it (its node's transform does not apply).
+    let mut skinned = false;
+    match place {
+        None => raw
+            .positions
+            .extend(local.map(|p| world.transform_point3(p))),
+        Some((character, node)) => {
+            let local: Vec<DVec3> = local.collect();
+            let influences = match node.skin() {
+                Some(skin) => {
+                    skinned = true;
+                    crate::character::skinned_influences(prim, &skin, &local, buffers, name)?
+                }
+                None => local
+                    .iter()
+                    .map(|&local| crate::character::Influence::Rigid {
+                        local,
+                        node: node.index(),
+                    })
+                    .collect(),
+            };
+            for inf in influences {
+                raw.positions.push(character.add(inf));
+            }
+        }
     }
 
     let indices: Vec<usize> = match prim.indices() {
@@ -546,7 +591,7 @@ fn read_primitive(
     };
     raw.reserve_triangles(tris.len(), name)?;
     // A mirroring transform turns the winding inside out.
-    let mirror = world.determinant() < 0.0;
+    let mirror = !skinned && world.determinant() < 0.0;
     raw.triangles.extend(tris.into_iter().map(|[a, b, c]| {
         if mirror {
             [base + a, base + c, base + b]

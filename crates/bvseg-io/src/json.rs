@@ -118,6 +118,8 @@ struct PartVolume {
     volume: Volume,
     fraction: f64,
     protrusion: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bone: Option<serde_json::Value>,
 }
 
 #[derive(Serialize)]
@@ -156,6 +158,16 @@ fn compact<T: Serialize>(value: &T) -> String {
         Ok(s) => s,
         Err(e) => unreachable!("serialising plain data failed: {e}"),
     }
+}
+
+/// A volume's `bone`: the glTF node index of its joint, or the joint's name when the
+/// skeleton did not come from a glTF file.
+fn bone_of(seg: &Segmentation, bone: Option<usize>) -> Option<serde_json::Value> {
+    let joint = seg.skeleton.as_ref()?.joints.get(bone?)?;
+    Some(match joint.node {
+        Some(n) => serde_json::Value::from(n),
+        None => serde_json::Value::from(joint.name.clone()),
+    })
 }
 
 /// Appends `"key":[` and one element per line, so that the file is easy to read and diff.
@@ -209,6 +221,7 @@ pub fn to_json_string(seg: &Segmentation) -> String {
                 volume: Volume::from(&p.volume),
                 fraction: p.fraction,
                 protrusion: p.protrusion,
+                bone: bone_of(seg, p.bone),
             })
         }),
     );
@@ -341,6 +354,7 @@ mod tests {
             sample_parts: vec![0; 100],
             cell_size: 0.125,
             budget_exhausted: false,
+            skeleton: None,
         }
     }
 

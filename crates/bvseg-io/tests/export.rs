@@ -82,6 +82,7 @@ fn seg() -> Segmentation {
         sample_parts: vec![],
         cell_size: 0.1,
         budget_exhausted: false,
+        skeleton: None,
     }
 }
 

@@ -197,6 +197,11 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
         sample_parts: cur.part.labels.clone(),
         cell_size: ctx.solid.grid.h,
         budget_exhausted: false,
+        skeleton: ctx
+            .votes
+            .as_ref()
+            .and(ctx.mesh.rig())
+            .map(|r| r.skeleton.clone()),
     }
 }
 
