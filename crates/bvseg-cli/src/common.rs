@@ -3,7 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
-use bvseg_core::{Cancel, Kinds, Mesh, Params, Segmentation, Segmenter, Step, Target};
+use bvseg_core::{
+    Cancel, Kinds, Mesh, Params, Segmentation, Segmenter, SkeletonMode, Step, Target,
+};
 use bvseg_io::export::OutputFormat;
 use bvseg_io::{LoadOptions, LoadedMesh};
 use clap::Args;
@@ -120,6 +122,14 @@ pub struct ParamArgs {
     #[arg(long, value_name = "D", default_value_t = Params::default().margin)]
     pub margin: f64,
 
+    /// Where the first parts are seeded from (the paper's section 6.1): `skin` (the default)
+    /// uses a skinned glTF's skeleton when the file has one, `auto` computes an approximate
+    /// curve skeleton, `none` grows parts from one, and a path reads a `bvseg.skeleton/1`
+    /// file (docs/formats.md) for an unskinned mesh. A skinned mesh's volumes follow its
+    /// animation whichever start is chosen.
+    #[arg(long, value_name = "skin|auto|none|FILE", default_value = "skin")]
+    pub skeleton: String,
+
     /// Give up after this many seconds of segmentation: exit 2, write nothing.
     #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
     pub timeout: Option<f64>,
@@ -152,6 +162,30 @@ fn parse_target(s: &str) -> Result<Kinds, String> {
 }
 
 impl ParamArgs {
+    /// `mesh` with the skeleton `--skeleton FILE` names attached (unchanged for the other
+    /// values).
+    pub fn rigged(&self, mesh: &Mesh) -> anyhow::Result<Mesh> {
+        if matches!(self.skeleton.as_str(), "skin" | "auto" | "none") {
+            return Ok(mesh.clone());
+        }
+        if mesh.rig().is_some_and(|r| r.skin.is_some()) {
+            bail!(
+                "--skeleton {}: the mesh is skinned and uses its own skin's skeleton; \
+                 a skeleton file is for unskinned meshes (use --skeleton skin, auto or none)",
+                self.skeleton
+            );
+        }
+        let skeleton = bvseg_io::read_skeleton(&self.skeleton)?;
+        let rig = bvseg_core::Rig {
+            skeleton,
+            skin: None,
+        };
+        Ok(mesh
+            .clone()
+            .with_rig(rig)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", self.skeleton))?)
+    }
+
     /// The core's parameters, validated, and within `--max-samples`, for a run that writes
     /// `formats` (the hierarchy is built only when one of them carries it).
     pub fn params(&self, formats: &[OutputFormat]) -> anyhow::Result<Params> {
@@ -177,6 +211,11 @@ impl ParamArgs {
             polish: !self.no_polish,
             margin: self.margin,
             hierarchy: !self.no_hierarchy && formats.iter().any(|f| f.carries_hierarchy()),
+            skeleton: match self.skeleton.as_str() {
+                "auto" => SkeletonMode::Auto,
+                "none" => SkeletonMode::None,
+                _ => SkeletonMode::Rig,
+            },
             ..Params::default()
         };
         params.validate()?;

@@ -47,6 +47,13 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<ExitCode> {
             "bbox": [r.bbox_min.to_array(), r.bbox_max.to_array()],
             "warnings": warnings,
         });
+        let mut doc = doc;
+        if let Some(c) = loaded.character {
+            doc["skins"] = c.skins.into();
+            doc["joints"] = c.joints.into();
+            doc["animations"] = c.animations.into();
+            doc["poses"] = c.poses.into();
+        }
         write_stdout(&format!("{doc}\n"))?;
     } else {
         let mut t = format!(
@@ -83,6 +90,12 @@ pub fn run(args: &InfoArgs) -> anyhow::Result<ExitCode> {
             r.bbox_max.y,
             r.bbox_max.z,
         );
+        if let Some(c) = loaded.character {
+            t.push_str(&format!(
+                "skins         {}\njoints        {}\nanimations    {} ({} poses sampled)\n",
+                c.skins, c.joints, c.animations, c.poses
+            ));
+        }
         for w in &warnings {
             t.push_str(&format!("warning       {w}\n"));
         }

@@ -70,6 +70,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
         }
     }
     let LoadedMesh { mesh, .. } = &loaded;
+    let mesh = &args.params.rigged(mesh)?;
 
     let start = Instant::now();
     let progress = Progress::new(args.quiet);

@@ -16,6 +16,7 @@ mod gltf_in;
 mod json;
 mod obj;
 mod report;
+mod skeleton_file;
 mod stl;
 mod summary;
 mod volumes_read;
@@ -33,6 +34,7 @@ pub use finish::{load_arrays, LoadStats, LoadedMesh, MAX_TRIANGLES};
 pub use json::{schema_and_kind, to_json_string, write_json, GENERATOR, SCHEMA, SCHEMA_V2};
 pub use obj::MAX_INPUT_BYTES;
 pub use report::MeshReport;
+pub use skeleton_file::{parse_skeleton, read_skeleton, SKELETON_SCHEMA};
 pub use summary::{CliSummary, RunSummary, Tolerances, ViewerSummary};
 
 /// The mesh formats [`load`] and [`load_bytes`] read, as file extensions (compared
