@@ -117,6 +117,31 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
     let mut shapes = Vec::new();
     // Nodes that hold the hull meshes; outside the scene, appended after the scene's nodes.
     let mut hull_nodes = Vec::new();
+    // A skinned character's joints, as nodes 1..: each part's nodes hang under its bone's
+    // joint, so that an engine moving the joints moves the colliders.
+    let skeleton = seg
+        .skeleton
+        .as_ref()
+        .filter(|_| seg.parts.iter().any(|p| p.bone.is_some()));
+    let mut joint_children: Vec<Vec<usize>> = Vec::new();
+    if let Some(sk) = skeleton {
+        for j in &sk.joints {
+            let local = match j.parent {
+                Some(p) => sk.joints[p].rest.inverse() * j.rest,
+                None => j.rest,
+            };
+            if j.parent.is_none() {
+                children.push(nodes.len());
+            }
+            nodes.push(json!({"name": j.name, "matrix": local.to_cols_array().map(round)}));
+        }
+        joint_children = vec![Vec::new(); sk.joints.len()];
+        for (i, j) in sk.joints.iter().enumerate() {
+            if let Some(p) = j.parent {
+                joint_children[p].push(1 + i);
+            }
+        }
+    }
 
     for (i, part) in seg.parts.iter().enumerate() {
         let v = &part.volume;
@@ -163,8 +188,18 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
             Shape::Capsule | Shape::Hull => {}
             _ => display["scale"] = json!(vec(scale)),
         }
-        children.push(nodes.len());
-        nodes.push(display);
+        let bone = skeleton.zip(part.bone);
+        let mut place = |nodes: &mut Vec<Value>, mut node: Value| {
+            match bone {
+                Some((sk, b)) => {
+                    under_joint(&mut node, sk.joints[b].rest.inverse());
+                    joint_children[b].push(nodes.len());
+                }
+                None => children.push(nodes.len()),
+            }
+            nodes.push(node);
+        };
+        place(&mut nodes, display);
         let (r, h) = (round(v.radius()), round(v.radii.z));
         let mut implicit = |shape: Value| {
             shapes.push(shape);
@@ -197,14 +232,14 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
                 json!({"node": Value::Null, "convexHull": true})
             }
         };
-        children.push(nodes.len());
-        nodes.push(json!({
+        let collider = json!({
             "name": format!("part_{i}_collider"),
             "translation": vec(v.center),
             "rotation": rotation,
             "extensions": {"KHR_physics_rigid_bodies": {"collider": {"geometry": geometry}}},
             "extras": exact,
-        }));
+        });
+        place(&mut nodes, collider);
     }
 
     if let Some(m) = mesh {
@@ -235,6 +270,11 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
     }
 
     nodes[0]["children"] = json!(children);
+    for (j, c) in joint_children.into_iter().enumerate() {
+        if !c.is_empty() {
+            nodes[1 + j]["children"] = json!(c);
+        }
+    }
     for (i, collider, mesh_index) in hull_nodes {
         let node = nodes.len();
         nodes.push(json!({"name": format!("part_{i}_hull"), "mesh": mesh_index}));
@@ -268,6 +308,36 @@ pub fn to_glb(seg: &Segmentation, mesh: Option<&Mesh>) -> Vec<u8> {
     // serde_json's map keeps keys sorted, so the text is deterministic.
     let text = serde_json::to_vec(&doc).unwrap_or_default();
     container(text, b.bin)
+}
+
+/// Turns a node placed in model space (translation, rotation, scale) into one under a joint
+/// whose rest world matrix is `inverse`'s inverse: its `matrix` is `inverse` times its
+/// model-space transform, so that at rest it sits where it did.
+fn under_joint(node: &mut Value, inverse: glam::DMat4) {
+    let get = |key: &str, default: [f64; 4]| {
+        node.get(key)
+            .and_then(|v| serde_json::from_value::<Vec<f64>>(v.clone()).ok())
+            .map_or(default, |v| {
+                std::array::from_fn(|i| v.get(i).copied().unwrap_or(default[i]))
+            })
+    };
+    let t = get("translation", [0.0; 4]);
+    let r = get("rotation", [0.0, 0.0, 0.0, 1.0]);
+    let s = get("scale", [1.0; 4]);
+    let model = glam::DMat4::from_scale_rotation_translation(
+        DVec3::new(s[0], s[1], s[2]),
+        glam::DQuat::from_xyzw(r[0], r[1], r[2], r[3]),
+        DVec3::new(t[0], t[1], t[2]),
+    );
+    if let Some(o) = node.as_object_mut() {
+        o.remove("translation");
+        o.remove("rotation");
+        o.remove("scale");
+        o.insert(
+            "matrix".into(),
+            json!((inverse * model).to_cols_array().map(round)),
+        );
+    }
 }
 
 fn container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
