@@ -79,7 +79,9 @@ pub use params::{
     Params, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES,
 };
 pub use pipeline::Segmenter;
-pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, BUDGET_WARNING};
+pub use result::{
+    HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, Tolerance, Unmet, BUDGET_WARNING,
+};
 pub use rig::{Joint, Pose, Rig, Skeleton, Skin};
 pub use volume::{BoundingVolume, Polytope, Shape};
 
