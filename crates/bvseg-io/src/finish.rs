@@ -156,7 +156,6 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
             message: "too many vertices (more than 2^32)".into(),
         });
     }
-    bvseg_core::internals::work::add(positions.len() + triangles.len());
     let vertices_read = positions.len();
     let triangles_read = triangles.len();
     let (vertices, remap) = weld(&positions);
