@@ -75,6 +75,7 @@ mod inside;
 mod mesh;
 mod parallel;
 mod protrusion;
+mod report_json;
 mod vol;
 mod volumes;
 
@@ -82,6 +83,7 @@ mod volumes;
 mod test_support;
 
 pub use error::VerifyError;
+pub use report_json::ReportContext;
 pub use volumes::{Volume, Volumes, MAX_VOLUMES, SCHEMA_V1, SCHEMA_V2};
 
 use mesh::MeshRef;
