@@ -22,7 +22,7 @@ fn verify_error(mesh: &str, volumes: &str, e: VerifyError) -> PyErr {
         VerifyError::NoTriangles
         | VerifyError::BadVertex { .. }
         | VerifyError::BadIndex { .. }
-        | VerifyError::NoVolume(_) => MeshError::new_err(format!("{mesh}: {e}")),
+        | VerifyError::NoVolume { .. } => MeshError::new_err(format!("{mesh}: {e}")),
         VerifyError::Document(_) => PyValueError::new_err(format!("{volumes}: {e}")),
         _ => PyValueError::new_err(e.to_string()),
     }

@@ -72,7 +72,7 @@ mod tightening;
 mod volume;
 
 pub use cancel::Cancel;
-pub use error::{Error, MeshError, ParamError, RigError};
+pub use error::{Error, MeshError, NoVolume, ParamError, RigError, TooComplex};
 pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
 pub use params::{

@@ -537,7 +537,7 @@ mod tests {
         // A flat mesh encloses nothing.
         let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let e = verify(&flat, &[[0, 1, 2], [0, 2, 1]], &vb, &opts(30_000)).unwrap_err();
-        assert!(matches!(e, VerifyError::NoVolume(_)), "{e}");
+        assert!(matches!(e, VerifyError::NoVolume { .. }), "{e}");
     }
 
     #[test]

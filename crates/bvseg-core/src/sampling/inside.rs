@@ -57,7 +57,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::parallel::{map, threads};
-use crate::{Error, Mesh};
+use crate::{Error, Mesh, TooComplex};
 
 /// Lattice coordinates are clamped to this magnitude (far beyond any lattice that fits in
 /// memory) so that products of two stay finite and roundings to `i64` cannot saturate,
@@ -73,8 +73,11 @@ const COORD_LIMIT: f64 = 1e15;
 /// does (stacked copies, a fan of huge slivers), and the run is refused in a fraction of a
 /// second instead of taking minutes.
 pub fn column_budget(cells: f64) -> u64 {
-    (50e6 + 20.0 * cells.max(0.0)).min(1e18) as u64
+    (50e6 + SCANS_PER_CELL * cells.max(0.0)).min(1e18) as u64
 }
+
+/// The scans per cell that [`column_budget`] allows.
+const SCANS_PER_CELL: f64 = 20.0;
 
 /// For every cell centre `origin + h * (i, j, k)` of a `dims` lattice, whether it lies inside
 /// the solid bounded by `mesh`. Index `i + nx * (j + ny * k)`.
@@ -122,11 +125,9 @@ pub(crate) fn inside_cells_within(
     // What each pass will cost is known before any of them runs.
     let mut spend = |scans: u64| {
         if scans > *budget {
-            return Err(Error::TooComplex(
-                "sampling it would scan its lattice's columns more than 20 times per cell: \
-                 far more overlapping surface than a model has"
-                    .into(),
-            ));
+            return Err(Error::TooComplex(TooComplex::LatticeScans {
+                per_cell: SCANS_PER_CELL as u32,
+            }));
         }
         *budget -= scans;
         crate::work::add(scans as usize);
