@@ -12,46 +12,8 @@ use glam::DVec3;
 /// Geodesic icosphere: each icosahedron face split into `m * m` triangles (20 m^2 in all),
 /// points shared between faces by their integer barycentric key.
 fn icosphere(m: usize) -> Mesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let base: Vec<DVec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| DVec3::new(x, y, z))
-    .collect();
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
+    let (base, faces) = bvseg_testkit::geometry::icosahedron();
+    let base: Vec<DVec3> = base.iter().map(|&p| DVec3::from_array(p)).collect();
     let mut ids: HashMap<Vec<(usize, usize)>, u32> = HashMap::new();
     let mut verts = Vec::new();
     let mut point = |f: [usize; 3], w: [usize; 3]| {

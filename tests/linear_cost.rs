@@ -1,7 +1,7 @@
 //! The work of loading and segmenting a file grows at most linearly with the file, for every
 //! family of awkward inputs in `support/hostile.rs`. Work is counted, not timed
 //! (`bvseg::internals::work`: lattice columns scanned by the inside test, points fitted, outside cells
-//! counted, vertices and triangles read), so the test is exact on any machine; wall times
+//! counted, vertices welded and triangles checked), so the test is exact on any machine; wall times
 //! are in `benches/hostile.rs`.
 //!
 //! One test function, so that nothing else in this process adds to the counter meanwhile.

@@ -285,7 +285,11 @@ impl PySegmentation {
     /// `"tov"`, `"protrusion"` (in mesh units) or `"mov"`.
     #[getter]
     fn unmet(&self) -> Vec<(&'static str, f64, f64)> {
-        self.seg.unmet(&self.params)
+        self.seg
+            .unmet(&self.params)
+            .into_iter()
+            .map(|u| (u.tolerance.name(), u.value, u.limit))
+            .collect()
     }
 
     /// Whether the run's bound on work cut it short.

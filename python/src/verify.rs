@@ -1,10 +1,9 @@
 //! `verify`: the independent check `bvseg verify` runs (the `bvseg-verify` crate), with the
 //! same validation of the document first (`bvseg_io::parse_volumes`) and the same report.
-use bvseg_verify::{VerifyError, VerifyOptions, Volumes};
+use bvseg_verify::{ReportContext, VerifyError, VerifyOptions, Volumes};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use serde_json::json;
 
 use crate::errors::MeshError;
 use crate::mesh::PyMesh;
@@ -23,7 +22,7 @@ fn verify_error(mesh: &str, volumes: &str, e: VerifyError) -> PyErr {
         VerifyError::NoTriangles
         | VerifyError::BadVertex { .. }
         | VerifyError::BadIndex { .. }
-        | VerifyError::NoVolume(_) => MeshError::new_err(format!("{mesh}: {e}")),
+        | VerifyError::NoVolume { .. } => MeshError::new_err(format!("{mesh}: {e}")),
         VerifyError::Document(_) => PyValueError::new_err(format!("{volumes}: {e}")),
         _ => PyValueError::new_err(e.to_string()),
     }
@@ -62,43 +61,17 @@ pub fn verify(
     let r = py
         .detach(|| bvseg_verify::verify(&vertices, mesh.triangles(), &volumes, &opts))
         .map_err(|e| verify_error(&m.name, &volumes_name, e))?;
-    // The keys and values of the command line's `json_report`.
-    let report = json!({
-        "mesh": m.name,
-        "volumes_file": volumes_name,
-        "kind": file.kind,
-        "k": file.volumes.len(),
-        "enclosed": r.all_enclosed(),
-        "triangles": r.triangles,
-        "triangles_single": r.single,
-        "triangles_split": r.split,
-        "triangles_within_tolerance": r.within_tolerance,
-        "triangles_unenclosed": r.unenclosed,
-        "max_escape_rel": r.max_escape_rel,
-        "worst_triangle": r.worst_triangle,
-        "closed": r.closed,
-        "vol_mesh": r.volume,
-        "vol_mesh_grid": r.volume_grid,
-        "vol_mesh_grid_se": r.volume_grid_se,
-        "tov": r.tov,
-        "tov_se": r.tov_se,
-        "mov": r.mov.map(|m| m.0),
-        "mov_se": r.mov.map(|m| m.1),
-        "mov_index": r.mov.map(|m| m.2),
-        "ov": r.ov,
-        "ov_se": r.ov_se,
-        "coverage_interior": r.coverage_interior,
-        "protrusion": r.protrusion,
-        "protrusion_rel": r.protrusion_rel,
-        "boundary_points": r.boundary_points,
-        "reported_protrusion_rel": file.reported.protrusion_rel,
-        "reported_tov": file.reported.tov,
-        "reported_mov": file.reported.mov,
-        "grid": r.grid,
-        "grid_points": r.grid.iter().product::<usize>(),
-        "seed": seed,
-    });
-    Ok(report.to_string())
+    // The same JSON as `bvseg verify --json`.
+    Ok(r.to_json(&ReportContext {
+        mesh: &m.name,
+        volumes_file: &volumes_name,
+        kind: &file.kind,
+        k: file.volumes.len(),
+        reported_protrusion_rel: file.reported.protrusion_rel,
+        reported_tov: file.reported.tov,
+        reported_mov: file.reported.mov,
+        seed,
+    }))
 }
 
 /// The defaults of `verify`'s options.

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use bvseg_core::{Params, Segmentation, BUDGET_WARNING};
+use bvseg_core::{Params, Segmentation, Tolerance, BUDGET_WARNING};
 use bvseg_io::export::{write_labels, write_output, ExportOptions, OutputFormat};
 use bvseg_io::{CliSummary, LoadedMesh, RunSummary};
 use clap::Args;
@@ -143,18 +143,21 @@ pub fn unmet_message(seg: &Segmentation, params: &Params) -> (String, String) {
     let unmet = seg.unmet(params);
     let parts: Vec<String> = unmet
         .iter()
-        .map(|&(name, value, tol)| match name {
-            "tov" => format!("TOV {value:.3} vs {tol}"),
-            "protrusion" => format!(
-                "protrusion {:.4} vs {:.4} of the diagonal",
-                value / m.diagonal,
-                tol / m.diagonal
-            ),
-            _ => format!("MOV {value:.3} vs {tol}"),
+        .map(|u| {
+            let (value, tol) = (u.value, u.limit);
+            match u.tolerance {
+                Tolerance::Tov => format!("TOV {value:.3} vs {tol}"),
+                Tolerance::Protrusion => format!(
+                    "protrusion {:.4} vs {:.4} of the diagonal",
+                    value / m.diagonal,
+                    tol / m.diagonal
+                ),
+                _ => format!("MOV {value:.3} vs {tol}"),
+            }
         })
         .collect();
     let what = format!("tolerances not met at k = {} ({})", m.k, parts.join(", "));
-    let mov_only = unmet.iter().all(|u| u.0 == "mov");
+    let mov_only = unmet.iter().all(|u| u.tolerance == Tolerance::Mov);
     let hint = if mov_only {
         "flat ends and pointed tips keep MOV up whatever k (docs/method.md, \"What MOV can \
          reach\"); raise --mov or leave it out"

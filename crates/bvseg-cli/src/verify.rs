@@ -8,9 +8,8 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context};
 use bvseg_io::VolumesFile;
-use bvseg_verify::{verify, VerifyOptions, VerifyReport, Volumes};
+use bvseg_verify::{verify, ReportContext, VerifyOptions, VerifyReport, Volumes};
 use clap::Args;
-use serde_json::json;
 
 /// Arguments of `bvseg verify`.
 #[derive(Args, Debug)]
@@ -54,7 +53,7 @@ pub fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     let report = verify(&vertices, mesh.triangles(), &volumes, &opts)
         .map_err(|e| anyhow!("{}: {e}", args.mesh.display()))?;
     let text = if args.json {
-        json_report(args, &file, &report).to_string() + "\n"
+        json_report(args, &file, &report) + "\n"
     } else {
         summary(args, &file, &report)
     };
@@ -166,40 +165,15 @@ fn summary(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> String {
     s
 }
 
-fn json_report(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> serde_json::Value {
-    json!({
-        "mesh": args.mesh.display().to_string(),
-        "volumes_file": args.volumes.display().to_string(),
-        "kind": file.kind.as_str(),
-        "k": file.volumes.len(),
-        "enclosed": r.all_enclosed(),
-        "triangles": r.triangles,
-        "triangles_single": r.single,
-        "triangles_split": r.split,
-        "triangles_within_tolerance": r.within_tolerance,
-        "triangles_unenclosed": r.unenclosed,
-        "max_escape_rel": r.max_escape_rel,
-        "worst_triangle": r.worst_triangle,
-        "closed": r.closed,
-        "vol_mesh": r.volume,
-        "vol_mesh_grid": r.volume_grid,
-        "vol_mesh_grid_se": r.volume_grid_se,
-        "tov": r.tov,
-        "tov_se": r.tov_se,
-        "mov": r.mov.map(|m| m.0),
-        "mov_se": r.mov.map(|m| m.1),
-        "mov_index": r.mov.map(|m| m.2),
-        "ov": r.ov,
-        "ov_se": r.ov_se,
-        "coverage_interior": r.coverage_interior,
-        "protrusion": r.protrusion,
-        "protrusion_rel": r.protrusion_rel,
-        "boundary_points": r.boundary_points,
-        "reported_protrusion_rel": file.reported.protrusion_rel,
-        "reported_tov": file.reported.tov,
-        "reported_mov": file.reported.mov,
-        "grid": r.grid,
-        "grid_points": r.grid.iter().product::<usize>(),
-        "seed": args.seed,
+fn json_report(args: &VerifyArgs, file: &VolumesFile, r: &VerifyReport) -> String {
+    r.to_json(&ReportContext {
+        mesh: &args.mesh.display().to_string(),
+        volumes_file: &args.volumes.display().to_string(),
+        kind: &file.kind,
+        k: file.volumes.len(),
+        reported_protrusion_rel: file.reported.protrusion_rel,
+        reported_tov: file.reported.tov,
+        reported_mov: file.reported.mov,
+        seed: args.seed,
     })
 }

@@ -15,11 +15,11 @@ pub enum Error {
     InvalidParams(#[from] ParamError),
     /// The mesh is flat or encloses no volume that the sampling grid can see.
     #[error("the mesh encloses no volume (flat, open or degenerate): {0}")]
-    NoVolume(String),
+    NoVolume(NoVolume),
     /// The surface is far more complex than the sampling lattice can resolve in bounded
     /// time (typically a hostile file: many huge overlapping triangles).
     #[error("the mesh is too complex to sample: {0}")]
-    TooComplex(String),
+    TooComplex(TooComplex),
     /// A broken invariant inside bvseg (a bug): please report it with the input. Returned
     /// instead of a result with non-finite figures or volumes.
     #[error("internal error (please report it with the input): {0}")]
@@ -30,6 +30,69 @@ pub enum Error {
     /// The mesh's rig (skeleton or skin) is malformed.
     #[error(transparent)]
     Rig(#[from] RigError),
+}
+
+/// Why the sampling lattice sees no volume in a mesh ([`Error::NoVolume`]), and what would
+/// help.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum NoVolume {
+    /// The mesh's bounding box has no extent (or an infinite one) along some axis.
+    #[error(
+        "the bounding box is flat ({:.3e} x {:.3e} x {:.3e}); a solid needs extent along all \
+         three axes",
+        .extent[0],
+        .extent[1],
+        .extent[2]
+    )]
+    FlatBox {
+        /// The box's extent along x, y and z, in mesh units.
+        extent: [f64; 3],
+    },
+    /// No cell centre of the lattice lies inside the mesh, even on the finer lattices tried.
+    #[error(
+        "no grid cell centre lies inside the mesh; close its holes, or raise `samples` if the \
+         solid is thinner than a cell"
+    )]
+    NoCellInside,
+    /// Too few cells lie inside the mesh to segment it.
+    #[error(
+        "only {inside} grid cells lie inside the mesh (at least {needed} are needed); raise \
+         `samples`"
+    )]
+    FewCells {
+        /// The cells inside.
+        inside: usize,
+        /// The fewest a run takes.
+        needed: usize,
+    },
+}
+
+/// Why a surface is beyond what the sampling can do in bounded time or memory
+/// ([`Error::TooComplex`]), and what would help.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum TooComplex {
+    /// The inside test would scan the lattice's columns more than `per_cell` times per cell
+    /// (see docs/method.md): stacked copies of faces, or fans of huge slivers.
+    #[error(
+        "sampling it would scan its lattice's columns more than {per_cell} times per cell: far \
+         more overlapping surface than a model has; remove the repeated or overlapping faces"
+    )]
+    LatticeScans {
+        /// The bound on the scans per lattice cell.
+        per_cell: u32,
+    },
+    /// An allocation failed (noted by the web viewer's allocator, before its worker aborts).
+    #[error(
+        "the core ran out of memory (an allocation of {:.1} MB failed); reload the page and try \
+         fewer samples",
+        *.bytes as f64 / 1e6
+    )]
+    OutOfMemory {
+        /// The size of the allocation that failed, in bytes.
+        bytes: usize,
+    },
 }
 
 /// A rig that [`crate::Rig::validate`] (and so [`crate::Mesh::with_rig`]) rejects.

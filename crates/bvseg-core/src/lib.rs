@@ -72,16 +72,18 @@ mod tightening;
 mod volume;
 
 pub use cancel::Cancel;
-pub use error::{Error, MeshError, ParamError, RigError};
+pub use error::{Error, MeshError, NoVolume, ParamError, RigError, TooComplex};
 pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
 pub use params::{
     Params, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES,
 };
 pub use pipeline::Segmenter;
-pub use result::{HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, BUDGET_WARNING};
+pub use result::{
+    HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, Tolerance, Unmet, BUDGET_WARNING,
+};
 pub use rig::{Joint, Pose, Rig, Skeleton, Skin};
-pub use volume::{BoundingVolume, Polytope, Shape};
+pub use volume::{BoundingVolume, Polytope, Shape, ShapeView};
 
 /// The stages' own entry points, for the benchmarks, the fuzz targets and the tests that
 /// check one stage at a time. Not part of the API: anything here may change in any release.

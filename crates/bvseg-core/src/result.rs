@@ -145,6 +145,52 @@ pub struct Segmentation {
 pub const BUDGET_WARNING: &str = "refinement stopped early: the volumes cover far more empty \
     space than their parts (many pieces scattered over a large box?); they still enclose the mesh";
 
+/// One of the tolerances a tolerance-mode run is asked to meet (see [`crate::Params`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Tolerance {
+    /// The total outside volume, [`Metrics::tov`], against `params.tov` (a fraction).
+    Tov,
+    /// The protrusion, [`Metrics::protrusion`], against `params.max_protrusion_abs` or
+    /// `params.max_protrusion` times the diagonal (both in mesh units).
+    Protrusion,
+    /// The maximum outside volume, [`Metrics::mov`], against `params.mov` (a fraction).
+    Mov,
+}
+
+impl Tolerance {
+    /// The tolerance's short name, as the Python package and the JSON reports spell it:
+    /// `"tov"`, `"protrusion"` or `"mov"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tov => "tov",
+            Self::Protrusion => "protrusion",
+            Self::Mov => "mov",
+        }
+    }
+}
+
+impl std::fmt::Display for Tolerance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A tolerance a tolerance-mode run left unmet: which, the figure reached and the limit it
+/// should have stayed below, in the units of the figure (a fraction for TOV and MOV, mesh
+/// units for the protrusion).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Unmet {
+    /// Which tolerance.
+    pub tolerance: Tolerance,
+    /// The figure the run reached.
+    pub value: f64,
+    /// The tolerance it was asked to stay below.
+    pub limit: f64,
+}
+
 impl Segmentation {
     /// Whether a tolerance-mode run (`params.k == None`) met its tolerances: TOV below
     /// `params.tov`, the protrusion below its tolerance, and MOV below `params.mov` if set.
@@ -155,11 +201,11 @@ impl Segmentation {
         params.k.is_none().then(|| self.unmet(params).is_empty())
     }
 
-    /// Which tolerances a tolerance-mode run left unmet, by name (`"tov"`, `"protrusion"`,
-    /// `"mov"`), each with its value and its tolerance (the protrusion in mesh units). Empty
-    /// when every tolerance is met or the run had a fixed k.
+    /// Which tolerances a tolerance-mode run left unmet, each with its value and its limit
+    /// (see [`Unmet`]), in the order TOV, protrusion, MOV. Empty when every tolerance is met
+    /// or the run had a fixed k.
     #[must_use]
-    pub fn unmet(&self, params: &crate::Params) -> Vec<(&'static str, f64, f64)> {
+    pub fn unmet(&self, params: &crate::Params) -> Vec<Unmet> {
         if params.k.is_some() {
             return Vec::new();
         }
@@ -173,13 +219,25 @@ impl Segmentation {
         };
         let mut out = Vec::new();
         if tol.tov_bad(x) {
-            out.push(("tov", m.tov, tol.tov));
+            out.push(Unmet {
+                tolerance: Tolerance::Tov,
+                value: m.tov,
+                limit: tol.tov,
+            });
         }
         if tol.protrusion_bad(x) {
-            out.push(("protrusion", m.protrusion, tol.protrusion));
+            out.push(Unmet {
+                tolerance: Tolerance::Protrusion,
+                value: m.protrusion,
+                limit: tol.protrusion,
+            });
         }
         if let Some(t) = tol.mov.filter(|_| tol.mov_bad(x)) {
-            out.push(("mov", m.mov, t));
+            out.push(Unmet {
+                tolerance: Tolerance::Mov,
+                value: m.mov,
+                limit: t,
+            });
         }
         out
     }

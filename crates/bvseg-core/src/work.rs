@@ -1,7 +1,8 @@
 //! A count of the work done, for the tests that check that costs grow linearly with the
 //! input: a counter, unlike a timing, is exact and repeatable whatever else the machine
 //! does. Each stage whose cost depends on the input adds what it processed (lattice columns
-//! scanned, points fitted, cells counted, triangles read). Not part of the API.
+//! scanned, points fitted, cells counted, vertices welded and triangles checked). Not part
+//! of the API.
 use std::sync::atomic::{AtomicU64, Ordering};
 
 static UNITS: AtomicU64 = AtomicU64::new(0);

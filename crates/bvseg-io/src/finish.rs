@@ -159,7 +159,6 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
             message: "too many vertices (more than 2^32)".into(),
         });
     }
-    bvseg_core::internals::work::add(positions.len() + triangles.len());
     let vertices_read = positions.len();
     let triangles_read = triangles.len();
     let (vertices, remap) = weld(&positions);
@@ -218,24 +217,11 @@ mod tests {
     use super::*;
 
     fn cube() -> (Vec<DVec3>, Vec<[usize; 3]>) {
-        let v = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
-            .collect();
-        let t = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        (v, t)
+        let (v, t) = bvseg_testkit::geometry::unit_cube();
+        (
+            v.into_iter().map(DVec3::from_array).collect(),
+            t.iter().map(|t| t.map(|i| i as usize)).collect(),
+        )
     }
 
     #[test]

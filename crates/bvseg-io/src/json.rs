@@ -16,7 +16,7 @@
 //! the shortest decimal that reads back to the same f64.
 use std::path::Path;
 
-use bvseg_core::{BoundingVolume, Segmentation, Shape};
+use bvseg_core::{BoundingVolume, Segmentation, ShapeView};
 use serde::Serialize;
 
 use crate::{write_atomic, IoError};
@@ -62,21 +62,36 @@ impl From<&BoundingVolume> for Volume {
             radius: None,
             points: None,
         };
-        match v.shape {
-            Shape::Ellipsoid | Shape::Obb => {
+        match v.view() {
+            ShapeView::Ellipsoid { axes, radii, .. }
+            | ShapeView::Obb {
+                axes,
+                half_extents: radii,
+                ..
+            } => {
                 // The core keeps the axes as the columns of its matrix; the schema wants them
                 // as rows.
-                out.axes =
-                    Some([v.axes.x_axis, v.axes.y_axis, v.axes.z_axis].map(|a| a.to_array()));
-                out.radii = Some(v.radii.to_array());
+                out.axes = Some([axes.x_axis, axes.y_axis, axes.z_axis].map(|a| a.to_array()));
+                out.radii = Some(radii.to_array());
             }
-            Shape::Sphere => out.radius = Some(v.radius()),
-            Shape::Capsule | Shape::Cylinder => {
-                out.axis = Some(v.axis().to_array());
-                out.half_length = Some(v.half_length());
-                out.radius = Some(v.radius());
+            ShapeView::Sphere { radius, .. } => out.radius = Some(radius),
+            ShapeView::Capsule {
+                axis,
+                half_length,
+                radius,
+                ..
             }
-            Shape::Hull => {
+            | ShapeView::Cylinder {
+                axis,
+                half_length,
+                radius,
+                ..
+            } => {
+                out.axis = Some(axis.to_array());
+                out.half_length = Some(half_length);
+                out.radius = Some(radius);
+            }
+            ShapeView::Hull { .. } => {
                 out.center = None;
                 out.points = Some(v.hull_points().iter().map(|p| p.to_array()).collect());
             }
@@ -267,7 +282,7 @@ pub fn write_json(path: impl AsRef<Path>, seg: &Segmentation) -> Result<(), IoEr
 mod tests {
     use super::*;
     use bvseg_core::{
-        HierarchyNode, Kinds, Metrics as CoreMetrics, Part, Step as CoreStep, StepKind,
+        HierarchyNode, Kinds, Metrics as CoreMetrics, Part, Shape, Step as CoreStep, StepKind,
     };
     use glam::{DMat3, DVec3, EulerRot};
     use serde_json::Value;

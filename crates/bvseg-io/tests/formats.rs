@@ -10,30 +10,8 @@ use glam::{DMat4, DQuat, DVec3};
 
 /// A box [0,2]x[0,1]x[0,1] as 8 vertices and 12 outward triangles.
 fn cube() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let v = (0..8)
-        .map(|i| {
-            [
-                2.0 * (i & 1) as f32,
-                ((i >> 1) & 1) as f32,
-                ((i >> 2) & 1) as f32,
-            ]
-        })
-        .collect();
-    let t = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    (v, t)
+    let (v, t) = bvseg_testkit::geometry::cuboid([0.0; 3], [2.0, 1.0, 1.0]);
+    (v.iter().map(|p| p.map(|x| x as f32)).collect(), t)
 }
 
 fn stl_binary(v: &[[f32; 3]], t: &[[u32; 3]]) -> Vec<u8> {

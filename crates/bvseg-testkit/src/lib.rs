@@ -1,10 +1,12 @@
 //! # bvseg-testkit
 //!
 //! What bvseg's tests share (a dev-dependency only, never published): fresh scratch
-//! directories, the paths of the bundled meshes, running a binary in a directory, and reading
-//! what it printed or left behind.
+//! directories, the paths of the bundled meshes, running a binary in a directory, reading
+//! what it printed or left behind, and small test meshes ([`geometry`]).
 // A fixture that cannot set up fails the test that asked for it, loudly.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+pub mod geometry;
+
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -25,8 +25,15 @@ pub enum VerifyError {
         count: usize,
     },
     /// The mesh encloses no volume at the resolution of the verification grid.
-    #[error("the mesh encloses no volume (flat, open or degenerate): {0}")]
-    NoVolume(String),
+    #[error(
+        "the mesh encloses no volume (flat, open or degenerate): none of the verification \
+         grid's {points} points lies inside it; close its holes, or raise `points` if it is \
+         thinner than the grid's spacing"
+    )]
+    NoVolume {
+        /// The points of the grid.
+        points: usize,
+    },
     /// An option or a volume is out of its valid range.
     #[error("invalid parameter: {0}")]
     InvalidParams(String),

@@ -180,9 +180,9 @@ pub(crate) fn grid_metrics(
     let volume_grid_se = w_cell * (t.inside_diff as f64).sqrt();
     let volume = if closed { sv.abs() } else { volume_grid };
     if volume.is_nan() || volume <= 0.0 || t.inside == 0 {
-        return Err(VerifyError::NoVolume(
-            "no point of the verification grid lies inside the mesh".into(),
-        ));
+        return Err(VerifyError::NoVolume {
+            points: nx * ny * nz,
+        });
     }
     let rel = |n: u64| n as f64 * w_cell / volume;
     let rel_se = |n: u64| w_cell * (n as f64).sqrt() / volume;

@@ -75,6 +75,7 @@ mod inside;
 mod mesh;
 mod parallel;
 mod protrusion;
+mod report_json;
 mod vol;
 mod volumes;
 
@@ -82,6 +83,7 @@ mod volumes;
 mod test_support;
 
 pub use error::VerifyError;
+pub use report_json::ReportContext;
 pub use volumes::{Volume, Volumes, MAX_VOLUMES, SCHEMA_V1, SCHEMA_V2};
 
 use mesh::MeshRef;
@@ -535,7 +537,7 @@ mod tests {
         // A flat mesh encloses nothing.
         let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let e = verify(&flat, &[[0, 1, 2], [0, 2, 1]], &vb, &opts(30_000)).unwrap_err();
-        assert!(matches!(e, VerifyError::NoVolume(_)), "{e}");
+        assert!(matches!(e, VerifyError::NoVolume { .. }), "{e}");
     }
 
     #[test]

@@ -5,7 +5,7 @@ use glam::{DMat3, DVec3};
 use crate::Volume;
 
 /// A mesh as [`crate::verify`] takes it.
-pub(crate) type Arrays = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+pub(crate) use bvseg_testkit::geometry::Arrays;
 
 /// A box with centre `c`, half extents `half` along the columns of `rot`, facing outward.
 pub(crate) fn cuboid(c: DVec3, half: DVec3, rot: DMat3) -> Arrays {
@@ -19,20 +19,7 @@ pub(crate) fn cuboid(c: DVec3, half: DVec3, rot: DMat3) -> Arrays {
             (c + rot * (s * half)).to_array()
         })
         .collect();
-    let t = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
+    let t = bvseg_testkit::geometry::BOX_TRIANGLES.to_vec();
     (v, t)
 }
 

@@ -14,6 +14,7 @@ use std::sync::{Arc, Mutex};
 
 use bvseg_core::{
     BoundingVolume, Cancel, Error, Mesh, Params, Segmentation, Segmenter, Step, StepKind,
+    TooComplex,
 };
 use web_time::{Duration, Instant};
 
@@ -286,11 +287,7 @@ impl Session {
                 .ok()
                 .and_then(|p| p.clone())
                 .map(|msg| Error::Internal(format!("{msg}; reload the page"))),
-            size => Some(Error::TooComplex(format!(
-                "the core ran out of memory (an allocation of {:.1} MB failed); reload the \
-                 page and try fewer samples",
-                size as f64 / 1e6
-            ))),
+            size => Some(Error::TooComplex(TooComplex::OutOfMemory { bytes: size })),
         };
         if let Some(e) = failed {
             inbox.cancel.cancel();

@@ -41,6 +41,8 @@ impl Mesh {
         {
             return Err(MeshError::BadVertex { index });
         }
+        // Every loader ends here, so this is where reading a file's triangles is counted.
+        crate::work::add(triangles.len());
         let count = vertices.len();
         for (index, t) in triangles.iter().enumerate() {
             if let Some(&vertex) = t.iter().find(|&&v| v as usize >= count) {

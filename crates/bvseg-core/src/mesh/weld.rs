@@ -12,6 +12,8 @@ use super::Mesh;
 /// the inside test. Only the first `u32::MAX` vertices are welded (indices are u32, so no
 /// triangle can refer to the others).
 pub fn weld(positions: &[DVec3]) -> (Vec<DVec3>, Vec<u32>) {
+    // Every loader welds what it read, so this is where reading a file's vertices is counted.
+    crate::work::add(positions.len());
     let n = positions.len().min(u32::MAX as usize);
     // +0.0 turns -0.0 into 0.0 so that both weld.
     let key = |p: DVec3| (p + DVec3::ZERO).to_array().map(f64::to_bits);

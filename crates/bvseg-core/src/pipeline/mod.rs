@@ -35,7 +35,8 @@ use crate::sampling::Grid;
 use crate::skeleton::seeds::seeded_partition;
 use crate::tightening::tighten;
 use crate::{
-    BoundingVolume, Cancel, Error, HierarchyNode, Mesh, Params, Segmentation, Step, StepKind,
+    BoundingVolume, Cancel, Error, HierarchyNode, Mesh, NoVolume, Params, Segmentation, Step,
+    StepKind,
 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,10 +106,10 @@ impl Segmenter {
         let grid = Grid::from_mesh(mesh, params.samples)?;
         cancel.check()?;
         if grid.len() < 8 {
-            return Err(Error::NoVolume(format!(
-                "only {} grid cells lie inside the mesh",
-                grid.len()
-            )));
+            return Err(Error::NoVolume(NoVolume::FewCells {
+                inside: grid.len(),
+                needed: 8,
+            }));
         }
         let solid = Solid::new(grid);
         let ctx = Context::new(mesh, solid, params, cancel);

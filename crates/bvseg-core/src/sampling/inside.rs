@@ -57,7 +57,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::parallel::{map, threads};
-use crate::{Error, Mesh};
+use crate::{Error, Mesh, TooComplex};
 
 /// Lattice coordinates are clamped to this magnitude (far beyond any lattice that fits in
 /// memory) so that products of two stay finite and roundings to `i64` cannot saturate,
@@ -73,8 +73,11 @@ const COORD_LIMIT: f64 = 1e15;
 /// does (stacked copies, a fan of huge slivers), and the run is refused in a fraction of a
 /// second instead of taking minutes.
 pub fn column_budget(cells: f64) -> u64 {
-    (50e6 + 20.0 * cells.max(0.0)).min(1e18) as u64
+    (50e6 + SCANS_PER_CELL * cells.max(0.0)).min(1e18) as u64
 }
+
+/// The scans per cell that [`column_budget`] allows.
+const SCANS_PER_CELL: f64 = 20.0;
 
 /// For every cell centre `origin + h * (i, j, k)` of a `dims` lattice, whether it lies inside
 /// the solid bounded by `mesh`. Index `i + nx * (j + ny * k)`.
@@ -122,11 +125,9 @@ pub(crate) fn inside_cells_within(
     // What each pass will cost is known before any of them runs.
     let mut spend = |scans: u64| {
         if scans > *budget {
-            return Err(Error::TooComplex(
-                "sampling it would scan its lattice's columns more than 20 times per cell: \
-                 far more overlapping surface than a model has"
-                    .into(),
-            ));
+            return Err(Error::TooComplex(TooComplex::LatticeScans {
+                per_cell: SCANS_PER_CELL as u32,
+            }));
         }
         *budget -= scans;
         crate::work::add(scans as usize);
@@ -573,7 +574,6 @@ mod tests {
     use super::*;
     use crate::mesh::edges_balance;
     use glam::DQuat;
-    use std::collections::HashMap;
 
     /// A triangle soup under construction; `finish` welds equal positions.
     #[derive(Clone, Default)]
@@ -656,65 +656,10 @@ mod tests {
     }
 
     fn icosphere(subdiv: usize, r: f64, c: DVec3) -> Soup {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut v: Vec<DVec3> = [
-            (-1.0, t, 0.0),
-            (1.0, t, 0.0),
-            (-1.0, -t, 0.0),
-            (1.0, -t, 0.0),
-            (0.0, -1.0, t),
-            (0.0, 1.0, t),
-            (0.0, -1.0, -t),
-            (0.0, 1.0, -t),
-            (t, 0.0, -1.0),
-            (t, 0.0, 1.0),
-            (-t, 0.0, -1.0),
-            (-t, 0.0, 1.0),
-        ]
-        .iter()
-        .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
-        .collect();
-        let mut f: Vec<[usize; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        for _ in 0..subdiv {
-            let mut mid = HashMap::new();
-            let mut m = |a: usize, b: usize, v: &mut Vec<DVec3>| {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    v.push((v[a] + v[b]).normalize());
-                    v.len() - 1
-                })
-            };
-            f = f
-                .iter()
-                .flat_map(|&[a, b, c]| {
-                    let (ab, bc, ca) = (m(a, b, &mut v), m(b, c, &mut v), m(c, a, &mut v));
-                    [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-                })
-                .collect();
-        }
+        let (v, tris) = bvseg_testkit::geometry::icosphere(subdiv, r, c.to_array());
         Soup {
-            verts: v.iter().map(|&p| c + r * p).collect(),
-            tris: f.iter().map(|t| t.map(|i| i as u32)).collect(),
+            verts: v.into_iter().map(DVec3::from_array).collect(),
+            tris,
         }
     }
 

@@ -22,7 +22,7 @@ pub use runs::InsideRuns;
 use crate::math;
 use glam::DVec3;
 
-use crate::{Error, Mesh};
+use crate::{Error, Mesh, NoVolume};
 
 /// Marker for "no sample" in index arrays.
 pub const NONE: u32 = u32::MAX;
@@ -66,10 +66,9 @@ impl Grid {
         let (lo, hi) = mesh.bbox();
         let ext = hi - lo;
         if ext.min_element() <= 0.0 || !ext.is_finite() {
-            return Err(Error::NoVolume(format!(
-                "the bounding box is flat ({:.3e} x {:.3e} x {:.3e})",
-                ext.x, ext.y, ext.z
-            )));
+            return Err(Error::NoVolume(NoVolume::FlatBox {
+                extent: ext.to_array(),
+            }));
         }
         let box_vol = ext.x * ext.y * ext.z;
         let mut vol = mesh.signed_volume().abs();
@@ -105,9 +104,7 @@ impl Grid {
             }
         }
         if grid.points.is_empty() {
-            return Err(Error::NoVolume(
-                "no grid cell centre lies inside the mesh".into(),
-            ));
+            return Err(Error::NoVolume(NoVolume::NoCellInside));
         }
         Ok(grid)
     }

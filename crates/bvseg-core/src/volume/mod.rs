@@ -90,6 +90,73 @@ pub struct BoundingVolume {
     pub polytope: Option<Arc<Polytope>>,
 }
 
+/// A [`BoundingVolume`]'s parameters as its shape has them (see [`BoundingVolume::view`]):
+/// what each of the frame's `radii` means, said once here so that no caller interprets them
+/// by shape. Lengths are in mesh units; axes are unit vectors in mesh coordinates. Exhaustive
+/// like [`Shape`], so that a new kind makes every match on it say what to do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ShapeView<'a> {
+    /// The solid ellipsoid with semi-axes `radii[j]` along the columns `j` of `axes`.
+    Ellipsoid {
+        /// Centre.
+        center: DVec3,
+        /// Orthonormal, right-handed; column `j` is the axis of `radii[j]`.
+        axes: DMat3,
+        /// The semi-axes.
+        radii: DVec3,
+    },
+    /// The oriented box with half-extents `half_extents[j]` along the columns `j` of `axes`.
+    Obb {
+        /// Centre.
+        center: DVec3,
+        /// Orthonormal, right-handed; column `j` is the axis of `half_extents[j]`.
+        axes: DMat3,
+        /// The half-extents.
+        half_extents: DVec3,
+    },
+    /// The ball of radius `radius` about `center`.
+    Sphere {
+        /// Centre.
+        center: DVec3,
+        /// Radius.
+        radius: f64,
+    },
+    /// The points within `radius` of the segment `center ± half_length * axis` (0 for a
+    /// capsule as short as a ball).
+    Capsule {
+        /// The segment's midpoint.
+        center: DVec3,
+        /// The segment's direction, a unit vector.
+        axis: DVec3,
+        /// Half the segment's length.
+        half_length: f64,
+        /// Radius.
+        radius: f64,
+    },
+    /// The solid circular cylinder of radius `radius` around the segment
+    /// `center ± half_length * axis`.
+    Cylinder {
+        /// The axis segment's midpoint.
+        center: DVec3,
+        /// The axis, a unit vector.
+        axis: DVec3,
+        /// Half the height.
+        half_length: f64,
+        /// Radius.
+        radius: f64,
+    },
+    /// A convex hull: `polytope` in local coordinates `t`, the world point
+    /// `center + scale * t` (see [`BoundingVolume::world`], [`BoundingVolume::hull_points`]).
+    Hull {
+        /// The origin of the local coordinates.
+        center: DVec3,
+        /// The scale from local to world coordinates.
+        scale: f64,
+        /// The polyhedron; `None` only for a hull built field by field without one.
+        polytope: Option<&'a Polytope>,
+    },
+}
+
 /// Shortest capsule half-length relative to its radius: a capsule with a shorter segment is
 /// stored with this one (a ball, to within round-off), so that local coordinates stay finite.
 const MIN_CAPSULE_LENGTH: f64 = 1e-9;
@@ -159,6 +226,47 @@ impl BoundingVolume {
             radii: DVec3::splat(scale),
             polytope: Some(Arc::new(poly)),
         })
+    }
+
+    /// The volume's parameters as its shape has them, so that no caller reads `radii` by
+    /// shape: e.g. a sphere's centre and radius, a capsule's centre, axis, half-length and
+    /// radius, a hull's polyhedron.
+    #[must_use]
+    pub fn view(&self) -> ShapeView<'_> {
+        let center = self.center;
+        match self.shape {
+            Shape::Ellipsoid => ShapeView::Ellipsoid {
+                center,
+                axes: self.axes,
+                radii: self.radii,
+            },
+            Shape::Obb => ShapeView::Obb {
+                center,
+                axes: self.axes,
+                half_extents: self.radii,
+            },
+            Shape::Sphere => ShapeView::Sphere {
+                center,
+                radius: self.radius(),
+            },
+            Shape::Capsule => ShapeView::Capsule {
+                center,
+                axis: self.axis(),
+                half_length: self.half_length(),
+                radius: self.radius(),
+            },
+            Shape::Cylinder => ShapeView::Cylinder {
+                center,
+                axis: self.axis(),
+                half_length: self.half_length(),
+                radius: self.radius(),
+            },
+            Shape::Hull => ShapeView::Hull {
+                center,
+                scale: self.radii.x,
+                polytope: self.polytope(),
+            },
+        }
     }
 
     /// The polyhedron of a hull, in local coordinates.
@@ -399,6 +507,47 @@ fn frame_from_z(z: DVec3) -> DMat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_view_names_each_shapes_parameters() {
+        let c = DVec3::new(1.0, 2.0, 3.0);
+        assert_eq!(
+            BoundingVolume::sphere(c, 0.5).view(),
+            ShapeView::Sphere {
+                center: c,
+                radius: 0.5
+            }
+        );
+        let cap = BoundingVolume::capsule(c, DVec3::Y, 2.0, 0.25);
+        let ShapeView::Capsule {
+            center,
+            axis,
+            half_length,
+            radius,
+        } = cap.view()
+        else {
+            panic!("a capsule's view is a capsule");
+        };
+        assert_eq!((center, half_length, radius), (c, 2.0, 0.25));
+        assert!((axis - DVec3::Y).length() < 1e-12);
+        // A capsule as short as a ball reads half-length 0, as `half_length()` does.
+        let ball = BoundingVolume::capsule(c, DVec3::Z, 0.0, 1.0);
+        assert!(
+            matches!(ball.view(), ShapeView::Capsule { half_length, .. } if half_length == 0.0)
+        );
+        let cube: Vec<DVec3> = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, (i >> 2) as f64))
+            .collect();
+        let hull = BoundingVolume::hull(&cube).unwrap();
+        let ShapeView::Hull {
+            scale, polytope, ..
+        } = hull.view()
+        else {
+            panic!("a hull's view is a hull");
+        };
+        assert_eq!(scale, hull.radii.x);
+        assert_eq!(polytope.map(|p| p.vertices().len()), Some(8));
+    }
 
     #[test]
     fn aabb_of_rotated_box_holds_corners() {

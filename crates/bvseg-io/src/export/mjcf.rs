@@ -5,7 +5,7 @@
 //! convex hull, placed by its vertices in the body's frame.
 use std::fmt::Write;
 
-use bvseg_core::{Segmentation, Shape};
+use bvseg_core::{Segmentation, Shape, ShapeView};
 
 use super::proxy::{part_color, volume_rotation};
 
@@ -56,19 +56,32 @@ pub fn to_mjcf(seg: &Segmentation, model: &str) -> String {
             );
             continue;
         }
-        let (kind, size) = match v.shape {
-            Shape::Ellipsoid => (
-                "ellipsoid",
-                format!("{} {} {}", v.radii.x, v.radii.y, v.radii.z),
-            ),
-            Shape::Obb => ("box", format!("{} {} {}", v.radii.x, v.radii.y, v.radii.z)),
-            // MuJoCo wants a capsule's half-length above 0.
-            Shape::Sphere => ("sphere", format!("{}", v.radius())),
-            Shape::Capsule if v.half_length() <= 0.0 => ("sphere", format!("{}", v.radius())),
-            Shape::Capsule => ("capsule", format!("{} {}", v.radius(), v.half_length())),
-            Shape::Cylinder | Shape::Hull => {
-                ("cylinder", format!("{} {}", v.radius(), v.half_length()))
+        let (kind, size) = match v.view() {
+            ShapeView::Ellipsoid { radii: e, .. } => {
+                ("ellipsoid", format!("{} {} {}", e.x, e.y, e.z))
             }
+            ShapeView::Obb {
+                half_extents: e, ..
+            } => ("box", format!("{} {} {}", e.x, e.y, e.z)),
+            ShapeView::Sphere { radius, .. } => ("sphere", format!("{radius}")),
+            // MuJoCo wants a capsule's half-length above 0.
+            ShapeView::Capsule {
+                half_length,
+                radius,
+                ..
+            } if half_length <= 0.0 => ("sphere", format!("{radius}")),
+            ShapeView::Capsule {
+                half_length,
+                radius,
+                ..
+            } => ("capsule", format!("{radius} {half_length}")),
+            ShapeView::Cylinder {
+                half_length,
+                radius,
+                ..
+            } => ("cylinder", format!("{radius} {half_length}")),
+            // Written as a mesh above.
+            ShapeView::Hull { .. } => continue,
         };
         let q = volume_rotation(v);
         let _ = writeln!(

@@ -1,6 +1,6 @@
 //! The geometry shared by the writers: unit sphere, cube and cylinder meshes, capsule and
 //! hull meshes, the transform of a volume, and part colours.
-use bvseg_core::{BoundingVolume, Shape};
+use bvseg_core::{BoundingVolume, ShapeView};
 use glam::{DMat3, DQuat, DVec3};
 
 /// The rotation taking local Y to a capsule's or cylinder's axis (the convention of glTF's
@@ -236,14 +236,17 @@ pub(crate) fn hull_vertices(v: &BoundingVolume) -> (Vec<DVec3>, Vec<[u32; 3]>) {
 /// enclosing polyhedron (a 12-segment UV sphere whose faces touch the ellipsoid from outside,
 /// 62 vertices); empty for the other kinds, which engines take natively.
 pub fn enclosing_points(v: &BoundingVolume) -> Vec<DVec3> {
-    match v.shape {
-        Shape::Hull => hull_vertices(v).0,
-        Shape::Ellipsoid => enclosing_sphere_hull(12)
+    match v.view() {
+        ShapeView::Hull { .. } => hull_vertices(v).0,
+        ShapeView::Ellipsoid { axes, radii, .. } => enclosing_sphere_hull(12)
             .positions
             .iter()
-            .map(|&p| v.axes * (p * v.radii))
+            .map(|&p| axes * (p * radii))
             .collect(),
-        _ => Vec::new(),
+        ShapeView::Obb { .. }
+        | ShapeView::Sphere { .. }
+        | ShapeView::Capsule { .. }
+        | ShapeView::Cylinder { .. } => Vec::new(),
     }
 }
 
@@ -258,26 +261,35 @@ pub(crate) fn world_triangles(v: &BoundingVolume, n: usize) -> (Vec<DVec3>, Vec<
             .collect();
         (p, m.triangles)
     };
-    match v.shape {
-        Shape::Ellipsoid | Shape::Sphere => {
+    match v.view() {
+        // A sphere is its frame with three equal radii: one mapping for the three kinds.
+        ShapeView::Ellipsoid { .. } | ShapeView::Sphere { .. } => {
             let m = unit_sphere(n);
             (world_mesh(v, &m), m.triangles)
         }
-        Shape::Obb => {
+        ShapeView::Obb { .. } => {
             let m = unit_cube();
             (world_mesh(v, &m), m.triangles)
         }
-        Shape::Cylinder => placed(
+        ShapeView::Cylinder {
+            half_length,
+            radius,
+            ..
+        } => placed(
             unit_cylinder(n),
             y_up_rotation(v),
-            DVec3::new(v.radius(), v.half_length(), v.radius()),
+            DVec3::new(radius, half_length, radius),
         ),
-        Shape::Capsule => placed(
-            capsule_mesh(v.radius(), v.half_length(), n),
+        ShapeView::Capsule {
+            half_length,
+            radius,
+            ..
+        } => placed(
+            capsule_mesh(radius, half_length, n),
             y_up_rotation(v),
             DVec3::ONE,
         ),
-        Shape::Hull => {
+        ShapeView::Hull { .. } => {
             let (p, t) = hull_vertices(v);
             (p.into_iter().map(|p| p + v.center).collect(), t)
         }
@@ -296,6 +308,7 @@ pub(crate) fn world_mesh(v: &BoundingVolume, unit: &UnitMesh) -> Vec<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bvseg_core::Shape;
 
     fn volume(m: &UnitMesh) -> f64 {
         m.triangles
