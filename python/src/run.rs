@@ -292,6 +292,30 @@ impl PySegmentation {
             .collect()
     }
 
+    /// For each part, the bone its volume moves with, as a dict (`joint`: the index into the
+    /// skeleton, `name`, `node`: the glTF node index or None, `parent`: the parent joint's
+    /// index or None), or None for a mesh without a skeleton.
+    #[getter]
+    fn bones<'py>(&self, py: Python<'py>) -> PyResult<Vec<Option<Bound<'py, PyDict>>>> {
+        let joints = self.seg.skeleton.as_ref().map(|s| s.joints.as_slice());
+        self.seg
+            .parts
+            .iter()
+            .map(|p| {
+                let Some((b, j)) = p.bone.zip(joints).and_then(|(b, j)| Some((b, j.get(b)?)))
+                else {
+                    return Ok(None);
+                };
+                let d = PyDict::new(py);
+                d.set_item("joint", b)?;
+                d.set_item("name", &j.name)?;
+                d.set_item("node", j.node)?;
+                d.set_item("parent", j.parent)?;
+                Ok(Some(d))
+            })
+            .collect()
+    }
+
     /// Whether the run's bound on work cut it short.
     #[getter]
     fn budget_exhausted(&self) -> bool {

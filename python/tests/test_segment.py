@@ -398,3 +398,15 @@ def test_ctrl_c_stops_a_run(threads):
         timer.cancel()
         signal.signal(signal.SIGINT, previous)
     assert time.perf_counter() - t < 20
+
+
+def test_a_skinned_character_returns_its_bones():
+    import pathlib
+
+    path = pathlib.Path(__file__).resolve().parents[2] / "assets" / "characters" / "CesiumMan.glb"
+    result = bvseg.segment(str(path), samples=6000)
+    bones = result.bones
+    assert len(bones) == result.k
+    assert all(b is not None for b in bones)
+    assert len({b["joint"] for b in bones}) >= 8
+    assert [v["bone"] for v in result.volumes] == [b["node"] for b in bones]

@@ -191,6 +191,15 @@ class Segmentation:
         return self._native.k
 
     @property
+    def bones(self) -> list[dict[str, Any] | None]:
+        """For each part, the bone its volume moves with (a skinned glTF character, or a mesh
+        given a skeleton): a dict with ``joint`` (index into the skeleton), ``name``, ``node``
+        (the glTF node index, or None) and ``parent`` (the parent joint's index, or None); None
+        for every part of a mesh without a skeleton. The volumes' ``bone`` field names the
+        same joint."""
+        return self._native.bones
+
+    @property
     def triangle_parts(self) -> np.ndarray:
         """uint32, per triangle of :attr:`mesh` (welded, degenerate ones dropped): the part whose
         volume encloses it."""
