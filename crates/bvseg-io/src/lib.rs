@@ -15,6 +15,7 @@ mod gltf_in;
 mod json;
 mod obj;
 mod report;
+pub mod robot;
 mod stl;
 mod summary;
 mod volumes_read;
@@ -37,7 +38,7 @@ pub use summary::{CliSummary, RunSummary, Tolerances, ViewerSummary};
 /// case-insensitively).
 pub const MESH_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "stl"];
 
-const SUPPORTED: &str = ".obj, .gltf, .glb, .stl";
+pub(crate) const SUPPORTED: &str = ".obj, .gltf, .glb, .stl";
 
 /// What [`load`] and [`load_bytes`] read of a file: `LoadOptions::default()` loads all of
 /// it, and each field set narrows it down. Write it as a struct literal ending in
