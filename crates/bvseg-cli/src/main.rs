@@ -13,6 +13,7 @@ mod common;
 mod info;
 mod plot;
 mod progress;
+mod robot;
 mod segment;
 mod verify;
 
@@ -37,6 +38,9 @@ enum Command {
     Batch(batch::BatchArgs),
     /// Check a volumes file against a mesh: enclosure of every triangle, TOV and MOV.
     Verify(verify::VerifyArgs),
+    /// Segment every link of a robot (URDF or MJCF) and write it back with primitive
+    /// colliders: URDF, MJCF, cuRobo spheres and a volumes file per link.
+    Robot(robot::RobotArgs),
 }
 
 /// Exit code when `--strict` was given and the tolerances were not met.
@@ -60,6 +64,7 @@ fn run() -> anyhow::Result<ExitCode> {
         Command::Info(args) => info::run(&args),
         Command::Batch(args) => batch::run(&args),
         Command::Verify(args) => verify::run(&args),
+        Command::Robot(args) => robot::run(&args),
     }
 }
 

@@ -71,6 +71,62 @@ pub enum IoError {
         /// The extensions that are supported, for the message.
         supported: &'static str,
     },
+    /// A robot file (URDF, MJCF) that is not well-formed XML or not a robot.
+    #[error("{name}: {message}")]
+    Robot {
+        /// The robot file, as the caller named it.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Two links (URDF) or bodies (MJCF) of a robot share a name.
+    #[error("{name}: the link name {link:?} is used twice")]
+    DuplicateLink {
+        /// The robot file.
+        name: String,
+        /// The repeated name.
+        link: String,
+    },
+    /// A joint names a parent or child that is not a link of the robot.
+    #[error("{name}: joint {joint:?}: its {role} {link:?} is not a link of the robot")]
+    UnknownLink {
+        /// The robot file.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// `parent` or `child`.
+        role: &'static str,
+        /// The name the joint gives.
+        link: String,
+    },
+    /// An MJCF `<include>` that includes itself, directly or not.
+    #[error("{name}: include cycle: {chain}")]
+    IncludeCycle {
+        /// The file that includes one of its includers.
+        name: String,
+        /// The files of the cycle, joined by ` -> `.
+        chain: String,
+    },
+    /// A link's mesh file does not exist (under any of the places it may be read from).
+    #[error("{name}: link {link:?}: mesh file {file:?} not found (looked for {tried})")]
+    MissingMesh {
+        /// The robot file.
+        name: String,
+        /// The link.
+        link: String,
+        /// The file name, as the robot file gives it.
+        file: String,
+        /// The paths tried, joined by `, `.
+        tried: String,
+    },
+    /// A link's mesh could not be loaded; the source names the file.
+    #[error("link {link:?}: {source}")]
+    Link {
+        /// The link.
+        link: String,
+        /// Why its mesh could not be loaded.
+        source: Box<IoError>,
+    },
 }
 
 impl IoError {

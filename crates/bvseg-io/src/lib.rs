@@ -16,6 +16,7 @@ mod gltf_in;
 mod json;
 mod obj;
 mod report;
+pub mod robot;
 mod skeleton_file;
 mod stl;
 mod summary;
@@ -41,7 +42,7 @@ pub use summary::{CliSummary, RunSummary, Tolerances, ViewerSummary};
 /// case-insensitively).
 pub const MESH_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "stl"];
 
-const SUPPORTED: &str = ".obj, .gltf, .glb, .stl";
+pub(crate) const SUPPORTED: &str = ".obj, .gltf, .glb, .stl";
 
 /// What [`load`] and [`load_bytes`] read of a file: `LoadOptions::default()` loads all of
 /// it, and each field set narrows it down. Write it as a struct literal ending in

@@ -114,3 +114,46 @@ fn escape(s: &str) -> String {
     }
     out
 }
+
+/// One volume as an MJCF `<geom>` line (no indentation, no newline) named `name`; a hull
+/// refers to the mesh asset `mesh`, which [`hull_asset`] writes. For writers that place
+/// volumes in bodies of their own (the robot writer).
+pub(crate) fn geom_element(
+    v: &bvseg_core::BoundingVolume,
+    name: &str,
+    mesh: &str,
+    rgba: &str,
+) -> String {
+    if v.shape == Shape::Hull {
+        return format!("<geom name=\"{name}\" type=\"mesh\" mesh=\"{mesh}\" rgba=\"{rgba}\"/>");
+    }
+    let (kind, size) = match v.shape {
+        Shape::Ellipsoid => (
+            "ellipsoid",
+            format!("{} {} {}", v.radii.x, v.radii.y, v.radii.z),
+        ),
+        Shape::Obb => ("box", format!("{} {} {}", v.radii.x, v.radii.y, v.radii.z)),
+        Shape::Sphere => ("sphere", format!("{}", v.radius())),
+        Shape::Capsule if v.half_length() <= 0.0 => ("sphere", format!("{}", v.radius())),
+        Shape::Capsule => ("capsule", format!("{} {}", v.radius(), v.half_length())),
+        Shape::Cylinder | Shape::Hull => {
+            ("cylinder", format!("{} {}", v.radius(), v.half_length()))
+        }
+    };
+    let q = volume_rotation(v);
+    format!(
+        "<geom name=\"{name}\" type=\"{kind}\" size=\"{size}\" pos=\"{} {} {}\" \
+         quat=\"{} {} {} {}\" rgba=\"{rgba}\"/>",
+        v.center.x, v.center.y, v.center.z, q.w, q.x, q.y, q.z,
+    )
+}
+
+/// The mesh asset line of a hull volume for [`geom_element`].
+pub(crate) fn hull_asset(v: &bvseg_core::BoundingVolume, mesh: &str) -> String {
+    let coords: Vec<String> = v
+        .hull_points()
+        .iter()
+        .map(|p| format!("{} {} {}", p.x, p.y, p.z))
+        .collect();
+    format!("<mesh name=\"{mesh}\" vertex=\"{}\"/>", coords.join("  "))
+}

@@ -4,7 +4,7 @@
 //!
 //! Every writer is deterministic: equal segmentations give byte-identical files.
 mod glb;
-mod mjcf;
+pub(crate) mod mjcf;
 mod obj;
 mod proxy;
 

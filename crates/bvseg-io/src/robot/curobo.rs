@@ -1,0 +1,54 @@
+//! cuRobo's robot file fragment: collision spheres per link and the adjacent links to ignore.
+use std::fmt::Write;
+
+use super::{LinkResults, Robot};
+
+/// A YAML key, quoted when it is not a plain word.
+fn key(s: &str) -> String {
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
+    {
+        s.to_owned()
+    } else {
+        format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
+    }
+}
+
+/// `collision_spheres: {LINK: [{center: [x, y, z], radius: r}]}` in each link's frame, from
+/// `spheres` (each link's sphere-only segmentation, by link index; a volume that is not a
+/// sphere is written as its enclosing sphere), and `self_collision_ignore: {LINK: [...]}`
+/// listing each link's parent and children.
+pub fn to_curobo(robot: &Robot, spheres: LinkResults) -> String {
+    let mut s = format!(
+        "# {}: collision spheres for {}\ncollision_spheres:\n",
+        crate::GENERATOR,
+        robot.name
+    );
+    for (i, link) in robot.links.iter().enumerate() {
+        let Some(Some(seg)) = spheres.get(i) else {
+            continue;
+        };
+        let _ = writeln!(s, "  {}:", key(&link.name));
+        for p in &seg.parts {
+            let v = &p.volume;
+            let (c, r) = if v.shape == bvseg_core::Shape::Sphere {
+                (v.center, v.radius())
+            } else {
+                let (lo, hi) = v.aabb();
+                ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+            };
+            let _ = writeln!(
+                s,
+                "    - center: [{}, {}, {}]\n      radius: {}",
+                c.x, c.y, c.z, r
+            );
+        }
+    }
+    s.push_str("self_collision_ignore:\n");
+    for (name, adj) in robot.adjacent() {
+        let list: Vec<String> = adj.iter().map(|a| key(a)).collect();
+        let _ = writeln!(s, "  {}: [{}]", key(&name), list.join(", "));
+    }
+    s
+}
