@@ -180,10 +180,9 @@ impl ParamArgs {
             skeleton,
             skin: None,
         };
-        Ok(mesh
-            .clone()
+        mesh.clone()
             .with_rig(rig)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", self.skeleton))?)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", self.skeleton))
     }
 
     /// The core's parameters, validated, and within `--max-samples`, for a run that writes
