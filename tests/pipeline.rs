@@ -4,7 +4,7 @@
 use bvseg::internals::Grid;
 use bvseg::internals::{is_connected, solid_components};
 use bvseg::shapes::{capsule, ellipsoid, union};
-use bvseg::{segment, Kinds, Mesh, Params, Segmentation};
+use bvseg::{segment, Kinds, Mesh, Params, Sampling, Segmentation, SkeletonMode};
 use glam::{DMat3, DVec3};
 
 fn bundled(name: &str) -> Mesh {
@@ -184,6 +184,56 @@ fn auto_mode_stops_only_when_tolerances_are_met_or_k_is_exhausted() {
         seg.tolerances_met(&params),
         Some(met(&seg.history[seg.history.len() - 1]))
     );
+}
+
+/// Adaptive sampling: weighted blocks fill the thick inside, and every promise of the regular
+/// lattice still holds: the parts cover every sample and every cell of its block, they are
+/// connected, enclose every triangle, leave no gap inside, and their fractions (by cells) sum
+/// to one; the same on one and two threads, with the auto skeleton's start too.
+#[test]
+fn adaptive_sampling_keeps_every_promise() {
+    let mesh = bundled("spot.obj");
+    for skeleton in [SkeletonMode::None, SkeletonMode::Auto] {
+        let params = Params {
+            samples: 6_000,
+            sampling: Sampling::Adaptive,
+            skeleton,
+            ..Params::default()
+        };
+        let grid = Grid::sampled(&mesh, params.samples, params.sampling).unwrap();
+        assert!(grid.has_blocks());
+        let regular = Grid::from_mesh(&mesh, params.samples).unwrap();
+        assert!(grid.h < 0.9 * regular.h, "{} vs {}", grid.h, regular.h);
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| segment(&mesh, &params).unwrap())
+        };
+        let seg = run(1);
+        assert_eq!(seg, run(2), "{skeleton:?}");
+        assert_eq!(seg.sample_parts.len(), grid.len());
+        let total: usize = seg.parts.iter().map(|p| p.samples).sum();
+        assert_eq!(total, grid.len());
+        let fsum: f64 = seg.parts.iter().map(|p| p.fraction).sum();
+        assert!((fsum - 1.0).abs() < 1e-9);
+        let (comps, _) = solid_components(&grid);
+        assert!(is_connected(&grid, &seg.sample_parts, &comps));
+        assert_encloses(&mesh, &seg, &grid);
+        for (s, &p) in seg.sample_parts.iter().enumerate() {
+            for [i, j, k] in grid.cells_of(s) {
+                let c = grid.cell_center(i64::from(i), i64::from(j), i64::from(k));
+                assert!(
+                    seg.parts[p as usize].volume.contains(c),
+                    "cell {c} of sample {s}"
+                );
+            }
+        }
+        let cov = interior_coverage(&mesh, &seg, 60_000);
+        assert!(cov >= 0.9999, "interior coverage {cov}");
+        assert!(seg.metrics.tov < 0.3, "TOV {}", seg.metrics.tov);
+    }
 }
 
 #[test]

@@ -138,7 +138,7 @@ fn flood(grid: &Grid, s: usize, mark: &mut [u32], id: u32, ok: impl Fn(usize) ->
     let mut stack = vec![s];
     mark[s] = id;
     while let Some(a) = stack.pop() {
-        for &b in &grid.neighbors[a] {
+        for &b in grid.neighbors(a) {
             if b != NONE && mark[b as usize] == u32::MAX && ok(b as usize) {
                 mark[b as usize] = id;
                 stack.push(b as usize);

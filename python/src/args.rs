@@ -32,6 +32,8 @@ pub struct Given<'py> {
     pub margin: Option<f64>,
     pub threads: Option<Bound<'py, PyAny>>,
     pub timeout: Option<f64>,
+    pub skeleton: Option<String>,
+    pub sampling: Option<String>,
 }
 
 /// What a run needs besides the mesh.
@@ -119,7 +121,7 @@ fn target(name: &str) -> PyResult<Kinds> {
 }
 
 /// The keyword arguments `segment` takes besides the mesh and `progress`.
-pub const NAMES: [&str; 17] = [
+pub const NAMES: [&str; 19] = [
     "k",
     "tov",
     "max_protrusion",
@@ -137,6 +139,8 @@ pub const NAMES: [&str; 17] = [
     "hierarchy",
     "margin",
     "timeout",
+    "skeleton",
+    "sampling",
 ];
 
 /// A float argument (an int is taken too): `TypeError` naming the parameter otherwise.
@@ -148,6 +152,15 @@ fn float(name: &str, v: &Bound<'_, PyAny>) -> PyResult<f64> {
     }
     v.extract::<f64>()
         .map_err(|_| PyTypeError::new_err(format!("{name} must be a number, got {}", type_name(v))))
+}
+
+fn string(name: &str, v: &Bound<'_, PyAny>) -> PyResult<String> {
+    Ok(v.cast::<PyString>()
+        .map_err(|_| {
+            PyTypeError::new_err(format!("{name} must be a string, got {}", type_name(v)))
+        })?
+        .to_str()?
+        .to_owned())
 }
 
 fn boolean(name: &str, v: &Bound<'_, PyAny>) -> PyResult<bool> {
@@ -212,6 +225,8 @@ impl<'py> Given<'py> {
                 "hierarchy" => g.hierarchy = boolean(&key, &value)?,
                 "margin" => g.margin = Some(float(&key, &value)?),
                 "timeout" => g.timeout = Some(float(&key, &value)?),
+                "skeleton" => g.skeleton = Some(string(&key, &value)?),
+                "sampling" => g.sampling = Some(string(&key, &value)?),
                 _ => return Err(unknown(function, &key)),
             }
         }
@@ -282,6 +297,18 @@ impl<'py> Given<'py> {
             polish: self.polish,
             hierarchy: self.hierarchy,
             margin: self.margin.unwrap_or(d.margin),
+            skeleton: match &self.skeleton {
+                Some(s) => s
+                    .parse()
+                    .map_err(|e| PyValueError::new_err(format!("skeleton: {e}")))?,
+                None => d.skeleton,
+            },
+            sampling: match &self.sampling {
+                Some(s) => s
+                    .parse()
+                    .map_err(|e| PyValueError::new_err(format!("sampling: {e}")))?,
+                None => d.sampling,
+            },
             ..d
         };
         params
@@ -353,6 +380,8 @@ pub fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("hierarchy", d.hierarchy)?;
     out.set_item("margin", d.margin)?;
     out.set_item("timeout", py.None())?;
+    out.set_item("skeleton", d.skeleton.to_string())?;
+    out.set_item("sampling", d.sampling.to_string())?;
     Ok(out)
 }
 

@@ -77,6 +77,8 @@ def test_tolerance_mode_defaults_are_the_clis(tmp_path, run_cli):
          dict(tov=0.5, max_protrusion=0.1, seed=3, merge=False)),
         (["--max-protrusion-abs", "1.5", "--mov", "2.0", "--max-k", "10", "--no-polish", "--margin", "0.01"],
          dict(max_protrusion_abs=1.5, mov=2.0, max_k=10, polish=False, margin=0.01)),
+        (["--sampling", "adaptive", "--skeleton", "auto", "--max-k", "12"],
+         dict(sampling="adaptive", skeleton="auto", max_k=12)),
     ],
 )
 def test_parameters_mirror_the_cli(tmp_path, run_cli, cli_args, kwargs):
@@ -182,6 +184,7 @@ def test_defaults_are_the_cores(run_cli):
     assert d["kinds"] == "ellipsoid,obb,sphere,capsule,cylinder" and d["max_hull_vertices"] == 32
     assert d["k"] is None and d["mov"] is None and d["merge"] and d["polish"] and d["margin"] == 0
     assert d["hierarchy"] is True
+    assert d["skeleton"] == "skin" and d["sampling"] == "regular"
     # The CLI's --help shows the same defaults.
     help_text = run_cli("segment", "--help").stdout
     assert "[default: 0.3]" in help_text and "[default: 20000]" in help_text and "[default: 96]" in help_text
@@ -215,6 +218,8 @@ def test_defaults_are_the_cores(run_cli):
         (dict(threads=0), "threads must be between 1 and 4096, got 0"),
         (dict(timeout=-1), "timeout must be a number of seconds above 0"),
         (dict(seed=-1), "seed must be a non-negative integer"),
+        (dict(sampling="dense"), 'sampling: "dense" is not a sampling: use regular or adaptive'),
+        (dict(skeleton="bones"), 'skeleton: "bones" is not a skeleton mode'),
     ],
 )
 def test_bad_parameters_are_value_errors(kwargs, match):
@@ -232,6 +237,7 @@ def test_bad_parameters_are_value_errors(kwargs, match):
         (dict(tov="low"), "tov must be a number, got str"),
         (dict(kinds=3), "kinds must be a string or a list of strings"),
         (dict(merge="no"), "merge must be True or False"),
+        (dict(sampling=2), "sampling must be a string, got int"),
         (dict(no_merge=True), "unexpected keyword argument 'no_merge'"),
         (dict(progress=5), "progress must be callable"),
     ],

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
 use bvseg_core::{
-    Cancel, Kinds, Mesh, Params, Segmentation, Segmenter, SkeletonMode, Step, Target,
+    Cancel, Kinds, Mesh, Params, Sampling, Segmentation, Segmenter, SkeletonMode, Step, Target,
 };
 use bvseg_io::export::OutputFormat;
 use bvseg_io::{LoadOptions, LoadedMesh};
@@ -130,6 +130,12 @@ pub struct ParamArgs {
     #[arg(long, value_name = "skin|auto|none|FILE", default_value = "skin")]
     pub skeleton: String,
 
+    /// How the inside is sampled (the paper's section 6.2): `regular`, one sample per cell of
+    /// a lattice, or `adaptive`, a finer lattice whose thick inside is gathered into weighted
+    /// blocks, so that thin features get more samples at the same --samples
+    #[arg(long, value_name = "regular|adaptive", default_value = "regular", value_parser = str::parse::<Sampling>)]
+    pub sampling: Sampling,
+
     /// Give up after this many seconds of segmentation: exit 2, write nothing.
     #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
     pub timeout: Option<f64>,
@@ -210,11 +216,10 @@ impl ParamArgs {
             polish: !self.no_polish,
             margin: self.margin,
             hierarchy: !self.no_hierarchy && formats.iter().any(|f| f.carries_hierarchy()),
-            skeleton: match self.skeleton.as_str() {
-                "auto" => SkeletonMode::Auto,
-                "none" => SkeletonMode::None,
-                _ => SkeletonMode::Rig,
-            },
+            // A skeleton file is attached to the mesh (see `with_skeleton_file`) and used as
+            // its own.
+            skeleton: self.skeleton.parse().unwrap_or(SkeletonMode::Rig),
+            sampling: self.sampling,
             ..Params::default()
         };
         params.validate()?;

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use crate::bounding::hull::hull_points;
 use crate::partition::Solid;
-use crate::sampling::NONE;
+use crate::sampling::{Grid, NONE};
 use crate::Mesh;
 
 /// Above this many distinct corners, a sample keeps only those on their convex hull.
@@ -197,11 +197,17 @@ impl Enclosure {
             let i = t.wrapping_sub(first);
             i <= last - first && bits[i / 64] & (1 << (i % 64)) != 0
         };
+        let blocks = g.has_blocks();
         for &s in members {
             let s = s as usize;
+            if blocks {
+                cell_points(g, s, &member, &mut lat);
+                verts.extend_from_slice(self.corners_of(s));
+                continue;
+            }
             let c = g.coords[s].map(|x| 2 * x as i64);
             let mut interior = true;
-            for &t in &g.neighbors[s] {
+            for &t in g.neighbors(s) {
                 if t == NONE {
                     interior = false;
                 } else if !member(t as usize) {
@@ -229,6 +235,38 @@ impl Enclosure {
         );
         pts.extend(verts.iter().map(|&v| mesh.vertices()[v as usize]));
         pts
+    }
+}
+
+/// The lattice points sample `s` of an adaptive grid adds to its part's (see
+/// [`Enclosure::points_with`]), cell by cell, in doubled lattice coordinates: each of its
+/// cells that touches a cell of another sample not in the part (`member`), or outside the
+/// solid, and the centres of the faces it shares with other parts' cells. Blocks lie deep
+/// inside, so only their faces on other parts add points.
+fn cell_points(g: &Grid, s: usize, member: &impl Fn(usize) -> bool, lat: &mut Vec<[i64; 3]>) {
+    const STEPS: [[i64; 3]; 6] = [
+        [-1, 0, 0],
+        [1, 0, 0],
+        [0, -1, 0],
+        [0, 1, 0],
+        [0, 0, -1],
+        [0, 0, 1],
+    ];
+    for cell in g.cells_of(s) {
+        let c = cell.map(i64::from);
+        let mut interior = true;
+        for d in STEPS {
+            let t = g.sample_at(c[0] + d[0], c[1] + d[1], c[2] + d[2]);
+            if t == NONE {
+                interior = false;
+            } else if t as usize != s && !member(t as usize) {
+                interior = false;
+                lat.push([0, 1, 2].map(|a| 2 * c[a] + d[a]));
+            }
+        }
+        if !interior {
+            lat.push(c.map(|x| 2 * x));
+        }
     }
 }
 

@@ -34,7 +34,7 @@ pub fn pieces_in(
         stack.push(start);
         while let Some(s) = stack.pop() {
             size += 1;
-            for &t in &grid.neighbors[s as usize] {
+            for &t in grid.neighbors(s as usize) {
                 if t != NONE && piece[t as usize] == NONE && labels[t as usize] == l {
                     piece[t as usize] = id;
                     stack.push(t);
@@ -83,7 +83,7 @@ pub fn connected_merges(
         // Face neighbours are always in the same component.
         let c = solid_components[s];
         owns.insert((l, c));
-        for &t in &grid.neighbors[s] {
+        for &t in grid.neighbors(s) {
             if t != NONE && labels[t as usize] != l {
                 let m = labels[t as usize];
                 touch.insert((l.min(m), l.max(m), c));
@@ -189,7 +189,7 @@ pub fn make_connected(
     }
     let mut heap = BinaryHeap::new();
     for &s in &orphans {
-        for &t in &grid.neighbors[s as usize] {
+        for &t in grid.neighbors(s as usize) {
             if t != NONE && labels[t as usize] != NONE {
                 let part = labels[t as usize];
                 heap.push(Item {
@@ -206,7 +206,7 @@ pub fn make_connected(
             continue;
         }
         labels[s] = part;
-        for &t in &grid.neighbors[s] {
+        for &t in grid.neighbors(s) {
             if t != NONE && labels[t as usize] == NONE {
                 heap.push(Item {
                     cost: cost(t as usize, part),

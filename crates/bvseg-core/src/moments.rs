@@ -47,6 +47,30 @@ impl Moments {
         self.ss[5] -= p.y * p.z;
     }
 
+    /// Add the `b x b x b` cells of a block centred at `c` (a cell centre when `b` is odd,
+    /// a cell corner when even): the exact sums over its cells, integers for integer cell
+    /// positions, so the moments stay those of the cells one by one.
+    #[inline]
+    pub fn add_block(&mut self, c: DVec3, b: u32) {
+        let (n, s, ss) = block_sums(c, b);
+        self.n += n;
+        self.s += s;
+        for (a, x) in self.ss.iter_mut().zip(ss) {
+            *a += x;
+        }
+    }
+
+    /// Remove a block added by [`Moments::add_block`].
+    #[inline]
+    pub fn remove_block(&mut self, c: DVec3, b: u32) {
+        let (n, s, ss) = block_sums(c, b);
+        self.n -= n;
+        self.s -= s;
+        for (a, x) in self.ss.iter_mut().zip(ss) {
+            *a -= x;
+        }
+    }
+
     /// Sum of two sets' moments.
     #[inline]
     pub fn merged(&self, o: &Moments) -> Moments {
@@ -118,6 +142,29 @@ impl Moments {
     }
 }
 
+/// Count, sum and packed sum of `x x^T` over the cells of a `b x b x b` block centred at
+/// `c`: with the cell offsets `o` in `-(b-1)/2 ..= (b-1)/2` along each axis, `sum o = 0` and
+/// `sum o^2 = b (b^2 - 1) / 12` per axis, so the sums are `b^3 c`, `b^3 c c^T` plus that
+/// spread on the diagonal, all exact for block centres on the half-integer lattice.
+#[inline]
+fn block_sums(c: DVec3, b: u32) -> (f64, DVec3, [f64; 6]) {
+    let b = f64::from(b);
+    let n = b * b * b;
+    let spread = b * b * (b * (b * b - 1.0) / 12.0);
+    (
+        n,
+        n * c,
+        [
+            n * c.x * c.x + spread,
+            n * c.y * c.y + spread,
+            n * c.z * c.z + spread,
+            n * c.x * c.y,
+            n * c.x * c.z,
+            n * c.y * c.z,
+        ],
+    )
+}
+
 /// Determinant of a packed symmetric matrix.
 #[inline]
 pub fn det_packed(c: &[f64; 6]) -> f64 {
@@ -167,6 +214,35 @@ mod tests {
             m.add(p);
         }
         m
+    }
+
+    /// A block's moments are those of its cells added one by one, bit for bit, and removing
+    /// it restores the moments before.
+    #[test]
+    fn a_block_adds_its_cells_exactly() {
+        for (c, b) in [
+            (DVec3::new(3.5, -2.5, 10.5), 2),
+            (DVec3::new(-41.5, 7.5, 0.5), 4),
+            (DVec3::new(5.0, -6.0, 7.0), 1),
+        ] {
+            let mut base = Moments::default();
+            base.add(DVec3::new(1.0, 2.0, -3.0));
+            let mut cells = base;
+            let half = 0.5 * f64::from(b - 1);
+            for k in 0..b {
+                for j in 0..b {
+                    for i in 0..b {
+                        let o = DVec3::new(f64::from(i), f64::from(j), f64::from(k)) - half;
+                        cells.add(c + o);
+                    }
+                }
+            }
+            let mut block = base;
+            block.add_block(c, b);
+            assert_eq!(block, cells, "side {b}");
+            block.remove_block(c, b);
+            assert_eq!(block, base, "side {b}");
+        }
     }
 
     #[test]

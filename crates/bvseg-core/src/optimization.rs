@@ -89,7 +89,7 @@ pub fn lloyd(
             let g = &solid.grid;
             for &s in &last_touched {
                 is_boundary[s as usize] = on_boundary(g, &part.labels, &is_active, s);
-                for &t in &g.neighbors[s as usize] {
+                for &t in g.neighbors(s as usize) {
                     if t != NONE {
                         is_boundary[t as usize] = on_boundary(g, &part.labels, &is_active, t);
                     }
@@ -162,8 +162,8 @@ pub fn lloyd(
             let su = s as usize;
             let (from, to) = (prev[su], part.labels[su]);
             if from != to {
-                part.parts[from as usize].remove(solid.q[su]);
-                part.parts[to as usize].add(solid.q[su]);
+                solid.remove(&mut part.parts[from as usize], su);
+                solid.add(&mut part.parts[to as usize], su);
                 moved += 1;
             }
         }
@@ -224,7 +224,8 @@ fn parts_to_repair(
             repair[b as usize] = true;
             continue;
         }
-        let joins = grid.neighbors[s as usize]
+        let joins = grid
+            .neighbors(s as usize)
             .iter()
             .any(|&t| t != NONE && labels[t as usize] == b && prev[t as usize] == NONE);
         if !joins {
@@ -243,10 +244,13 @@ fn leaves_safely(
     s: u32,
     a: u32,
 ) -> bool {
-    for &t in &grid.neighbors[s as usize] {
+    for &t in grid.neighbors(s as usize) {
         if t != NONE && prev[t as usize] == a && labels[t as usize] != a {
             return false;
         }
+    }
+    if grid.side(s as usize) > 1 {
+        return shell_connected(grid, s as usize, |t| labels[t as usize] == a) == Some(true);
     }
     // Cell (x, y, z) of the 3x3x3 neighbourhood is bit x + 3 y + 9 z (centre 13).
     let [i, j, l] = grid.coords[s as usize].map(|c| c as i64);
@@ -308,7 +312,7 @@ fn leaves_safely(
 /// between active parts, so a boundary with an inactive one is not where they move).
 fn on_boundary(g: &crate::sampling::Grid, labels: &[u32], is_active: &[bool], s: u32) -> bool {
     let l = labels[s as usize];
-    g.neighbors[s as usize].iter().any(|&t| {
+    g.neighbors(s as usize).iter().any(|&t| {
         t != NONE && {
             let m = labels[t as usize];
             m != l && is_active[m as usize]
@@ -337,7 +341,7 @@ fn boundary_band(
             continue;
         }
         let l = labels[s as usize];
-        for &t in &g.neighbors[s as usize] {
+        for &t in g.neighbors(s as usize) {
             if t != NONE && labels[t as usize] != l && is_active[labels[t as usize] as usize] {
                 let m = labels[t as usize];
                 let bit = l.min(m) as usize * k + l.max(m) as usize;
@@ -351,7 +355,7 @@ fn boundary_band(
         let mut next = Vec::new();
         for &s in &ring {
             let l = labels[s as usize];
-            for &t in &g.neighbors[s as usize] {
+            for &t in g.neighbors(s as usize) {
                 // Rings stay within the scope: a neighbour in the same part is in it.
                 if t != NONE && !mark[t as usize] && labels[t as usize] == l {
                     mark[t as usize] = true;
@@ -384,6 +388,9 @@ fn boundary_band(
 /// through `s` can be rerouted inside the block) and cheap.
 fn removable(solid: &Solid, labels: &[u32], s: usize, label: u32) -> bool {
     let grid = &solid.grid;
+    if grid.side(s) > 1 {
+        return shell_connected(grid, s, |t| labels[t as usize] == label) != Some(false);
+    }
     let [ci, cj, ck] = grid.coords[s];
     let (ci, cj, ck) = (ci as i64, cj as i64, ck as i64);
     // Block cells in the part, indexed (dx+1) + 3 (dy+1) + 9 (dz+1).
@@ -434,6 +441,76 @@ fn removable(solid: &Solid, labels: &[u32], s: usize, label: u32) -> bool {
     present.iter().all(|&f| seen[f])
 }
 
+/// The test of [`removable`] and [`leaves_safely`] for a block of adaptive sampling: within
+/// the shell of cells one deep around the block, whether the cells across its faces whose
+/// samples `in_part` accepts are all connected through such cells (`None` when there are
+/// none). Any path through the block enters and leaves through such cells, so when they are
+/// connected around it, the block can leave the part without cutting it. (For a single cell
+/// this is the 3x3x3 test the callers run on bit masks.)
+fn shell_connected(
+    grid: &crate::sampling::Grid,
+    s: usize,
+    in_part: impl Fn(u32) -> bool,
+) -> Option<bool> {
+    let b = i64::from(grid.side(s));
+    let w = (b + 2) as usize;
+    let c = grid.coords[s].map(i64::from);
+    let at = |x: usize, y: usize, z: usize| x + w * (y + w * z);
+    let in_block = |v: i64| (1..=b).contains(&v);
+    let mut cell = vec![false; w * w * w];
+    let mut faces = Vec::new();
+    for z in 0..w {
+        for y in 0..w {
+            for x in 0..w {
+                let o = [x as i64, y as i64, z as i64];
+                let inner = o.iter().filter(|&&v| in_block(v)).count();
+                if inner == 3 {
+                    continue;
+                }
+                let t = grid.sample_at(c[0] + o[0] - 1, c[1] + o[1] - 1, c[2] + o[2] - 1);
+                if t != NONE && t as usize != s && in_part(t) {
+                    cell[at(x, y, z)] = true;
+                    if inner == 2 {
+                        faces.push(at(x, y, z));
+                    }
+                }
+            }
+        }
+    }
+    let &first = faces.first()?;
+    let mut seen = vec![false; w * w * w];
+    let mut stack = vec![first];
+    seen[first] = true;
+    while let Some(i) = stack.pop() {
+        let (x, y, z) = (i % w, (i / w) % w, i / (w * w));
+        let mut visit = |j: usize| {
+            if cell[j] && !seen[j] {
+                seen[j] = true;
+                stack.push(j);
+            }
+        };
+        if x > 0 {
+            visit(at(x - 1, y, z));
+        }
+        if x + 1 < w {
+            visit(at(x + 1, y, z));
+        }
+        if y > 0 {
+            visit(at(x, y - 1, z));
+        }
+        if y + 1 < w {
+            visit(at(x, y + 1, z));
+        }
+        if z > 0 {
+            visit(at(x, y, z - 1));
+        }
+        if z + 1 < w {
+            visit(at(x, y, z + 1));
+        }
+    }
+    Some(faces.iter().all(|&f| seen[f]))
+}
+
 /// Boundary polish with the exact change of F; returns the number of moves.
 pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> usize {
     let k = part.k();
@@ -450,7 +527,8 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
     for s in 0..n {
         let l = part.labels[s];
         if is_active[l as usize]
-            && grid.neighbors[s]
+            && grid
+                .neighbors(s)
                 .iter()
                 .any(|&t| t != NONE && part.labels[t as usize] != l)
         {
@@ -468,16 +546,15 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
             break;
         }
         let a = part.labels[s];
-        if !is_active[a as usize] || part.parts[a as usize].n <= 1.0 {
+        if !is_active[a as usize] || part.parts[a as usize].n <= f64::from(grid.weight(s)) {
             continue;
         }
-        let q = solid.q[s];
         let mut from = part.parts[a as usize];
-        from.remove(q);
+        solid.remove(&mut from, s);
         let from_term = from.f_term(CELL_VAR, 1.0);
         let mut best = None;
         let mut best_gain = 0.0;
-        for &t in &grid.neighbors[s] {
+        for &t in grid.neighbors(s) {
             if t == NONE {
                 continue;
             }
@@ -486,7 +563,7 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
                 continue;
             }
             let mut to = part.parts[b as usize];
-            to.add(q);
+            solid.add(&mut to, s);
             let to_term = to.f_term(CELL_VAR, 1.0);
             let gain = terms[a as usize] + terms[b as usize] - from_term - to_term;
             // A relative threshold keeps round-off from cycling samples back and forth.
@@ -499,11 +576,11 @@ pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> us
         if !removable(solid, &part.labels, s, a) {
             continue;
         }
-        part.move_sample(s, q, b);
+        part.move_sample(solid, s, b);
         terms[a as usize] = from_term;
         terms[b as usize] = to_term;
         moves += 1;
-        for &t in grid.neighbors[s].iter() {
+        for &t in grid.neighbors(s).iter() {
             if t != NONE && !queued[t as usize] {
                 queued[t as usize] = true;
                 queue.push_back(t as usize);
@@ -543,22 +620,46 @@ mod tests {
         members.iter().all(|&s| piece[s as usize] == 0)
     }
 
-    /// The local test that lets the Lloyd sweeps skip most connectivity repairs must never
-    /// pass a part that came apart: random batches of boundary moves on a holey solid.
-    #[test]
-    fn parts_the_local_test_passes_stay_connected() {
-        // A slab with a few pillars of holes: parts can break in many ways around them.
-        let g = Grid::from_inside_fn(DVec3::ZERO, DVec3::new(2.0, 2.0, 0.5), 0.1, |p| {
+    /// A slab with a few pillars of holes: parts can break in many ways around them. With
+    /// `blocks`, sampled finer and adaptively, so that blocks fill the slab between the holes.
+    fn holey_slab(blocks: bool) -> Grid {
+        let h = if blocks { 0.025 } else { 0.1 };
+        let g = Grid::from_inside_fn(DVec3::ZERO, DVec3::new(2.0, 2.0, 0.5), h, |p| {
             let hole = ((p.x * 5.0) as i64 % 3 == 1) && ((p.y * 5.0) as i64 % 3 == 1);
             (0.0..=2.0).contains(&p.x)
                 && (0.0..=2.0).contains(&p.y)
                 && (0.0..=0.5).contains(&p.z)
                 && !hole
         });
+        if blocks {
+            let g = g.into_blocks();
+            assert!(g.has_blocks());
+            g
+        } else {
+            g
+        }
+    }
+
+    /// The local test that lets the Lloyd sweeps skip most connectivity repairs must never
+    /// pass a part that came apart: random batches of boundary moves on a holey solid.
+    #[test]
+    fn parts_the_local_test_passes_stay_connected() {
+        local_test_passes_only_connected_parts(holey_slab(false));
+    }
+
+    /// The same on adaptive sampling, whose blocks take the general shell test.
+    #[test]
+    fn parts_the_local_test_passes_stay_connected_with_blocks() {
+        local_test_passes_only_connected_parts(holey_slab(true));
+    }
+
+    fn local_test_passes_only_connected_parts(g: Grid) {
         let solid = Solid::new(g);
         let g = &solid.grid;
         let mut rng = crate::rng::Rng::new(7);
-        let (mut passed, mut flagged) = (0, 0);
+        let (mut passed, mut flagged, mut blocks_moved) = (0, 0, 0);
+        // About as many moves per part on the finer adaptive slab as on the regular one.
+        let rate = if g.has_blocks() { 60 } else { 25 };
         for round in 0..200 {
             let k = 3 + round % 6;
             let part = cvt(&solid, k, round as u64);
@@ -568,15 +669,17 @@ mod tests {
             // Move a random share of the boundary samples to a random neighbouring part.
             for s in 0..labels.len() as u32 {
                 let l = part.labels[s as usize];
-                let others: Vec<u32> = g.neighbors[s as usize]
+                let others: Vec<u32> = g
+                    .neighbors(s as usize)
                     .iter()
                     .filter(|&&t| t != NONE && part.labels[t as usize] != l)
                     .map(|&t| part.labels[t as usize])
                     .collect();
-                if !others.is_empty() && rng.below(25) == 0 {
+                if !others.is_empty() && rng.below(rate) == 0 {
                     labels[s as usize] = others[rng.below(others.len())];
                     prev[s as usize] = l;
                     moved.push(s);
+                    blocks_moved += usize::from(g.side(s as usize) > 1);
                 }
             }
             let repair = parts_to_repair(g, &labels, &prev, &moved, k);
@@ -595,11 +698,63 @@ mod tests {
             passed > 100 && flagged > 100,
             "{passed} passed, {flagged} flagged"
         );
+        assert_eq!(
+            g.has_blocks(),
+            blocks_moved > 50,
+            "{blocks_moved} blocks moved"
+        );
+    }
+
+    /// The shell test on a block: a block that is the only link of a bar through it may not
+    /// leave the bar's part; a block at the edge of a half-space part may.
+    #[test]
+    fn a_block_that_links_a_bar_cannot_leave_it() {
+        let g = Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), 0.05, |p| {
+            p.abs().max_element() <= 0.95
+        })
+        .into_blocks();
+        let solid = Solid::new(g);
+        let g = &solid.grid;
+        let nx = g.dims[0];
+        let s = (0..g.len())
+            .filter(|&s| g.side(s) == 2)
+            .min_by_key(|&s| {
+                g.coords[s]
+                    .map(|c| (c as i64 - nx as i64 / 2).abs())
+                    .iter()
+                    .sum::<i64>()
+            })
+            .unwrap();
+        let [_, cy, cz] = g.coords[s];
+        let bar = |t: usize| {
+            g.cells_of(t)
+                .any(|[_, y, z]| (cy..cy + 2).contains(&y) && (cz..cz + 2).contains(&z))
+        };
+        let labels: Vec<u32> = (0..g.len()).map(|t| u32::from(!bar(t))).collect();
+        assert!(!removable(&solid, &labels, s, 0));
+        let prev = vec![NONE; labels.len()];
+        assert!(!leaves_safely(g, &labels, &prev, s as u32, 0));
+        // The whole half below the block's top, block included: the rest holds together
+        // around it.
+        let below = |t: usize| g.cells_of(t).any(|[_, _, z]| z < cz + 2);
+        let labels: Vec<u32> = (0..g.len()).map(|t| u32::from(!below(t))).collect();
+        assert_eq!(labels[s], 0);
+        assert!(removable(&solid, &labels, s, 0));
+        assert!(leaves_safely(g, &labels, &prev, s as u32, 0));
     }
 
     #[test]
     fn optimisation_never_raises_f_and_keeps_parts_connected() {
-        let solid = Solid::new(l_shape());
+        optimisation_keeps_its_promises(Solid::new(l_shape()));
+    }
+
+    /// The same on adaptive sampling: blocks move whole, moments stay exact.
+    #[test]
+    fn optimisation_keeps_its_promises_with_blocks() {
+        optimisation_keeps_its_promises(Solid::new(holey_slab(true)));
+    }
+
+    fn optimisation_keeps_its_promises(solid: Solid) {
         for seed in 0..4 {
             let mut part = cvt(&solid, 5, seed);
             let stats = optimize(&solid, &mut part, None, None, 100);

@@ -94,6 +94,24 @@ pub struct Params {
     /// one, and binds every part to a bone; [`SkeletonMode::Auto`] computes an approximate
     /// curve skeleton of the solid first; [`SkeletonMode::None`] ignores any skeleton.
     pub skeleton: SkeletonMode,
+    /// How the solid's interior is sampled (the paper's section 6.2): [`Sampling::Regular`]
+    /// (the default), one sample per cell of a regular lattice; [`Sampling::Adaptive`], a
+    /// finer lattice whose thick inside is gathered into weighted blocks, so that thin
+    /// features get more samples at the same [`Params::samples`].
+    pub sampling: Sampling,
+}
+
+/// How the solid's interior is sampled (see [`Params::sampling`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Sampling {
+    /// One sample per cell of a regular lattice: every sample stands for the same volume.
+    #[default]
+    Regular,
+    /// A finer lattice, whose cells at least 2 cells from the boundary are gathered into
+    /// blocks of 2x2x2, and at least 4 into blocks of 4x4x4: each block is one sample that
+    /// weighs as its cells. On the boundary and in thin features every cell is a sample.
+    Adaptive,
 }
 
 /// Where the initial partition's seeds come from (see [`Params::skeleton`]).
@@ -109,6 +127,54 @@ pub enum SkeletonMode {
     /// No skeleton: the tolerance mode grows parts from one per piece of the solid, a fixed
     /// k starts from a CVT.
     None,
+}
+
+impl std::str::FromStr for Sampling {
+    type Err = String;
+
+    /// `"regular"` or `"adaptive"`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "regular" => Ok(Self::Regular),
+            "adaptive" => Ok(Self::Adaptive),
+            _ => Err(format!("{s:?} is not a sampling: use regular or adaptive")),
+        }
+    }
+}
+
+impl std::fmt::Display for Sampling {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Regular => "regular",
+            Self::Adaptive => "adaptive",
+        })
+    }
+}
+
+impl std::str::FromStr for SkeletonMode {
+    type Err = String;
+
+    /// `"skin"` (the mesh's own skeleton: [`SkeletonMode::Rig`]), `"auto"` or `"none"`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "skin" => Ok(Self::Rig),
+            "auto" => Ok(Self::Auto),
+            "none" => Ok(Self::None),
+            _ => Err(format!(
+                "{s:?} is not a skeleton mode: use skin, auto or none"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for SkeletonMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Rig => "skin",
+            Self::Auto => "auto",
+            Self::None => "none",
+        })
+    }
 }
 
 impl Default for Params {
@@ -130,6 +196,7 @@ impl Default for Params {
             margin: 0.0,
             hierarchy: true,
             skeleton: SkeletonMode::Rig,
+            sampling: Sampling::Regular,
         }
     }
 }

@@ -20,7 +20,8 @@ pub const CELL_VAR: f64 = 1.0 / 12.0;
 pub struct Solid {
     /// The sampling grid.
     pub grid: Grid,
-    /// Sample positions in lattice units relative to `offset`.
+    /// Sample positions in lattice units relative to `offset` (a block's centre: half
+    /// integers for blocks of even side).
     pub q: Vec<DVec3>,
     /// Lattice coordinate that `q = 0` stands for.
     pub offset: [i64; 3],
@@ -41,12 +42,14 @@ impl Solid {
         let q = grid
             .coords
             .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(s, c)| {
+                let mid = 0.5 * f64::from(grid.side(s) - 1);
                 DVec3::new(
                     (c[0] as i64 - offset[0]) as f64,
                     (c[1] as i64 - offset[1]) as f64,
                     (c[2] as i64 - offset[2]) as f64,
-                )
+                ) + mid
             })
             .collect();
         let (components, pieces) = solid_components(&grid);
@@ -62,6 +65,30 @@ impl Solid {
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.q.len()
+    }
+
+    /// Number of lattice cells inside the solid (the samples' weights summed): the solid's
+    /// volume in cells, what TOV is relative to.
+    pub fn cells(&self) -> f64 {
+        self.grid.cells() as f64
+    }
+
+    /// Add sample `s` to moments `m`: its one cell, or every cell of its block.
+    #[inline]
+    pub fn add(&self, m: &mut Moments, s: usize) {
+        match self.grid.side(s) {
+            1 => m.add(self.q[s]),
+            b => m.add_block(self.q[s], b),
+        }
+    }
+
+    /// Remove sample `s` (added before) from moments `m`.
+    #[inline]
+    pub fn remove(&self, m: &mut Moments, s: usize) {
+        match self.grid.side(s) {
+            1 => m.remove(self.q[s]),
+            b => m.remove_block(self.q[s], b),
+        }
     }
 
     /// Whether there is no sample.
@@ -96,7 +123,7 @@ impl Partition {
     pub fn from_labels(solid: &Solid, labels: Vec<u32>, k: usize) -> Self {
         let mut parts = vec![Moments::default(); k];
         for (s, &l) in labels.iter().enumerate() {
-            parts[l as usize].add(solid.q[s]);
+            solid.add(&mut parts[l as usize], s);
         }
         Self { labels, parts }
     }
@@ -121,16 +148,16 @@ impl Partition {
         self.parts[i].e(CELL_VAR, 1.0)
     }
 
-    /// Move sample `s` (at `q`) to part `to`.
+    /// Move sample `s` to part `to`.
     #[inline]
-    pub fn move_sample(&mut self, s: usize, q: DVec3, to: u32) {
+    pub fn move_sample(&mut self, solid: &Solid, s: usize, to: u32) {
         let from = self.labels[s];
-        self.parts[from as usize].remove(q);
-        self.parts[to as usize].add(q);
+        solid.remove(&mut self.parts[from as usize], s);
+        solid.add(&mut self.parts[to as usize], s);
         self.labels[s] = to;
     }
 
-    /// Each part's number of samples.
+    /// Each part's number of cells (of samples, when each is one cell).
     pub fn counts(&self) -> Vec<f64> {
         self.parts.iter().map(|m| m.n).collect()
     }
@@ -167,11 +194,11 @@ impl Partition {
     /// Pairs of parts that touch (share a grid face), sorted, each once as `(a, b)`, `a < b`.
     pub fn adjacency(&self, grid: &Grid) -> Vec<(u32, u32)> {
         let mut pairs = Vec::new();
-        for (s, nb) in grid.neighbors.iter().enumerate() {
+        for s in 0..self.labels.len() {
             let a = self.labels[s];
-            // Looking only at +x, +y, +z neighbours sees each face once.
-            for &t in [nb[1], nb[3], nb[5]].iter() {
-                if t != crate::sampling::NONE {
+            // Looking only at the neighbours after a sample sees each touching pair once.
+            for &t in grid.neighbors(s) {
+                if t != crate::sampling::NONE && t as usize > s {
                     let b = self.labels[t as usize];
                     if a != b {
                         pairs.push((a.min(b), a.max(b)));

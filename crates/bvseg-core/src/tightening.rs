@@ -64,7 +64,7 @@ fn stays_connected(
         let mut stack = vec![s];
         seen[s as usize] = true;
         while let Some(x) = stack.pop() {
-            for &t in &g.neighbors[x as usize] {
+            for &t in g.neighbors(x as usize) {
                 if t != NONE && !seen[t as usize] && inside(t) {
                     seen[t as usize] = true;
                     stack.push(t);
@@ -86,7 +86,7 @@ fn layers(
     let mut layers: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
     for s in 0..solid.len() {
         let a = part.labels[s];
-        for &t in &g.neighbors[s] {
+        for &t in g.neighbors(s) {
             if t == NONE {
                 continue;
             }
@@ -113,14 +113,18 @@ fn layer_move(
     min_part: usize,
 ) -> Option<Move> {
     let n_from = part.parts[a as usize].n as usize;
-    if 2 * layer.len() > n_from || n_from - layer.len() < min_part {
+    let cells: usize = layer
+        .iter()
+        .map(|&s| solid.grid.weight(s as usize) as usize)
+        .sum();
+    if 2 * cells > n_from || n_from - cells < min_part {
         return None;
     }
     let mut m_from = part.parts[a as usize];
     let mut m_to = part.parts[b as usize];
     for &s in &layer {
-        m_from.remove(solid.q[s as usize]);
-        m_to.add(solid.q[s as usize]);
+        solid.remove(&mut m_from, s as usize);
+        solid.add(&mut m_to, s as usize);
     }
     Some(Move {
         from: a,
@@ -131,9 +135,9 @@ fn layer_move(
     })
 }
 
-/// A quarter of an average part: the smallest a move may leave a part.
+/// A quarter of an average part, in cells: the smallest a move may leave a part.
 fn min_part(solid: &Solid, part: &Partition) -> usize {
-    (solid.len() / (4 * part.k()).max(1)).max(8)
+    (solid.grid.cells() / (4 * part.k()).max(1)).max(8)
 }
 
 /// Fit both changed parts of every move that the cache lacks (in parallel).
@@ -370,7 +374,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
         }
         moves += applied;
         // Stop when a pass gains less than MIN_PASS_GAIN of the solid's volume in TOV.
-        let gain = relative(union_before.saturating_sub(cov.union), solid.len() as f64);
+        let gain = relative(union_before.saturating_sub(cov.union), solid.cells());
         if applied == 0 || gain < MIN_PASS_GAIN {
             if full || fulls == max_full {
                 break;
@@ -391,7 +395,7 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
     let (mesh, solid, fitter) = (&ctx.mesh, &ctx.solid, &mut ctx.fitter);
     let (tov_tol, mov_tol) = (tol.tov, tol.mov_bound());
     let among = None;
-    let total = solid.len() as f64;
+    let total = solid.cells();
     let min_part = min_part(solid, part);
     let mut moves = 0;
     for _ in 0..steps {

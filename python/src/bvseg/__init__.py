@@ -325,6 +325,10 @@ Keyword arguments (the command line's options; the defaults are the core's):
 - ``merge`` ({DEFAULTS['merge']}), ``polish`` ({DEFAULTS['polish']}): ``False`` is
   ``--no-merge``, ``--no-polish``.
 - ``margin`` ({DEFAULTS['margin']}): grow every volume outward by this, in mesh units.
+- ``skeleton`` ({DEFAULTS['skeleton']!r}): where the first parts are seeded from: ``"skin"``
+  (a skinned file's own skeleton), ``"auto"`` (an approximate curve skeleton) or ``"none"``.
+- ``sampling`` ({DEFAULTS['sampling']!r}): ``"regular"`` or ``"adaptive"`` (a finer lattice whose
+  thick inside is gathered into weighted blocks; ``--sampling``).
 - ``hierarchy`` ({DEFAULTS['hierarchy']}): build the bounding-volume hierarchy over the parts
   (about a sixth of a default run); only :meth:`Segmentation.to_json` carries it, so
   ``False`` suits a run written to GLB, MJCF or OBJ alone (its JSON then has an empty one).

@@ -160,13 +160,17 @@ fn with_margin(ctx: &Context, cur: State) -> State {
 /// each triangle's and sample's part.
 pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation {
     let k = cur.part.k();
-    let n = ctx.solid.len() as f64;
+    let n = ctx.solid.cells();
+    let mut samples = vec![0usize; k];
+    for &l in &cur.part.labels {
+        samples[l as usize] += 1;
+    }
     let bones = ctx.bones(&cur.part);
     let parts: Vec<Part> = (0..k)
         .map(|i| Part {
             volume: cur.volumes[i].clone(),
             fraction: cur.part.parts[i].n / n,
-            samples: cur.part.parts[i].n as usize,
+            samples: samples[i],
             ov: cur.ov[i],
             e: cur.part.e(i),
             protrusion: cur.pr[i],

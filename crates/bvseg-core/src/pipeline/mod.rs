@@ -103,7 +103,7 @@ impl Segmenter {
     pub fn with_cancel(mesh: &Mesh, params: &Params, cancel: Cancel) -> Result<Self, Error> {
         params.validate()?;
         cancel.check()?;
-        let grid = Grid::from_mesh(mesh, params.samples)?;
+        let grid = Grid::sampled(mesh, params.samples, params.sampling)?;
         cancel.check()?;
         if grid.len() < 8 {
             return Err(Error::NoVolume(NoVolume::FewCells {

@@ -71,7 +71,7 @@ fn overlapping(boxes: &[(DVec3, DVec3)]) -> Vec<(u32, u32)> {
 /// TOV and MOV after merging each pair of `pairs`, judged incrementally on the coverage of the
 /// union's outside cells. Stops early when the run's work bound is spent; the flag says so.
 pub fn options(ctx: &mut Context, cur: &State, pairs: &[(u32, u32)]) -> (Vec<MergeOption>, bool) {
-    let total = ctx.solid.len() as f64;
+    let total = ctx.solid.cells();
     let mut cov = Coverage::new(&ctx.solid);
     for f in &cur.fits {
         cov.add(&f.outside);

@@ -12,17 +12,41 @@ use super::Grid;
 /// three squared extents of a grid that fits in memory.
 const FAR: u32 = u32::MAX / 4;
 
-/// Each sample's distance to the nearest cell outside the solid, in cells (at least 1).
+/// Each sample's distance to the nearest cell outside the solid, in cells (at least 1). A
+/// block of adaptive sampling gets its nearest cell's distance plus half its side less one,
+/// about its centre's.
 pub fn boundary_distance(grid: &Grid) -> Vec<f64> {
+    let depth = cell_depths(grid);
+    let [nx, ny, _] = grid.dims;
+    (0..grid.len())
+        .map(|s| {
+            let near = grid
+                .cells_of(s)
+                .map(|[i, j, k]| depth[i as usize + nx * (j as usize + ny * k as usize)])
+                .min()
+                .unwrap_or(0);
+            f64::from(near).sqrt() + 0.5 * f64::from(grid.side(s) - 1)
+        })
+        .collect()
+}
+
+/// For every lattice cell (`i + nx (j + ny k)`), its squared distance to the nearest cell
+/// outside the solid, in cells squared: 0 outside, 1 on the boundary layer.
+pub fn cell_depths(grid: &Grid) -> Vec<u32> {
     let [nx, ny, nz] = grid.dims;
     // One layer of outside cells around the grid, so that the grid's border counts as
     // outside in every direction.
     let d = [nx + 2, ny + 2, nz + 2];
     let index = |i: usize, j: usize, k: usize| i + d[0] * (j + d[1] * k);
     let mut f = vec![0u32; d[0] * d[1] * d[2]];
-    for c in &grid.coords {
-        let [i, j, k] = c.map(|x| x as usize + 1);
-        f[index(i, j, k)] = FAR;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                if grid.sample_of_cell[i + nx * (j + ny * k)] != super::NONE {
+                    f[index(i + 1, j + 1, k + 1)] = FAR;
+                }
+            }
+        }
     }
     let mut line = Vec::new();
     let mut out = Vec::new();
@@ -50,13 +74,15 @@ pub fn boundary_distance(grid: &Grid) -> Vec<f64> {
             }
         }
     }
-    grid.coords
-        .iter()
-        .map(|c| {
-            let [i, j, k] = c.map(|x| x as usize + 1);
-            f64::from(f[index(i, j, k)]).sqrt()
-        })
-        .collect()
+    let mut depth = vec![0u32; nx * ny * nz];
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                depth[i + nx * (j + ny * k)] = f[index(i + 1, j + 1, k + 1)];
+            }
+        }
+    }
+    depth
 }
 
 /// The buffers of the one-dimensional transform.

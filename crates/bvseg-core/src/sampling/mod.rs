@@ -12,6 +12,15 @@
 //! surfaces pass through its cell centres far more often than chance: counted there alone,
 //! the outside volume of boxes around thin slabs came out up to 20 % below an independent
 //! measurement. The metrics count both lattices (see [`crate::metrics`]).
+//!
+//! **Adaptive sampling** (the paper's section 6.2, [`crate::Sampling::Adaptive`]): the
+//! lattice is finer, and where the solid is thick its cells are gathered into blocks of
+//! 2x2x2 or 4x4x4 cells, each one sample standing for all of its cells (its weight). Thin
+//! features and the layers along the boundary keep one sample per cell, so they are sampled
+//! densely, the thick inside sparsely. A block is still a set of lattice cells: its moments
+//! are the exact sums over its cells, the outside volume is still counted on the lattice
+//! cells, and the enclosure still meets on cell faces. A sample's [`Grid::side`] says how
+//! many cells along each axis it stands for; regular sampling has every side 1.
 pub mod distance;
 pub mod inside;
 mod runs;
@@ -22,7 +31,16 @@ pub use runs::InsideRuns;
 use crate::math;
 use glam::DVec3;
 
-use crate::{Error, Mesh, NoVolume};
+use crate::{Error, Mesh, NoVolume, Sampling};
+
+/// How much finer than a regular lattice of the same sample count an adaptive one starts:
+/// the first guess of the size loop in [`Grid::sampled`].
+const ADAPTIVE_START: f64 = 0.6;
+
+/// A block of side `b` cells is gathered into one sample only where every one of its cells
+/// lies at least `BLOCK_DEPTH * b` cells from the nearest cell outside the solid: the
+/// boundary and thin features keep single cells.
+const BLOCK_DEPTH: usize = 1;
 
 /// Marker for "no sample" in index arrays.
 pub const NONE: u32 = u32::MAX;
@@ -38,12 +56,20 @@ pub struct Grid {
     pub dims: [usize; 3],
     /// For each cell (`i + nx * (j + ny * k)`), its sample index or [`NONE`] when outside.
     pub sample_of_cell: Vec<u32>,
-    /// For each sample, its cell coordinates.
+    /// For each sample, the coordinates of its cell (of a block's first cell: every
+    /// coordinate a multiple of its side).
     pub coords: Vec<[u32; 3]>,
-    /// For each sample, its position (the cell centre).
+    /// For each sample, its position (the centre of its cell or block).
     pub points: Vec<DVec3>,
-    /// For each sample, its face neighbours (-x, +x, -y, +y, -z, +z) that are samples, or [`NONE`].
-    pub neighbors: Vec<[u32; 6]>,
+    /// The side of each sample's block of cells (1, 2 or 4), when the sampling is adaptive;
+    /// empty when every sample is one cell.
+    sides: Vec<u8>,
+    /// The face neighbours of every sample, see [`Grid::neighbors`]: six per sample
+    /// (-x, +x, -y, +y, -z, +z) when `neighbor_start` is empty, else CSR lists.
+    neighbor_list: Vec<u32>,
+    neighbor_start: Vec<u32>,
+    /// Number of inside cells (the samples' weights summed).
+    cells: usize,
     /// The inside cells of the sampling lattice and of the offset one, as runs per column
     /// (for counting and listing a volume's outside cells column by column). Cell `(i, j, k)`
     /// of the offset lattice (`0 <= i <= nx` and so on) has its centre at
@@ -63,6 +89,17 @@ impl Grid {
     /// [`Error::NoVolume`] when no cell lies inside, [`Error::TooComplex`] when the inside
     /// test would exceed its work bound.
     pub fn from_mesh(mesh: &Mesh, target: usize) -> Result<Self, Error> {
+        Self::sampled(mesh, target, Sampling::Regular)
+    }
+
+    /// Sample the solid bounded by `mesh` with about `target` samples, regularly or
+    /// adaptively (see the module's docs). An adaptive grid's lattice is finer, so that its
+    /// samples, most of them single cells near the boundary, still number about `target`.
+    ///
+    /// # Errors
+    ///
+    /// As [`Grid::from_mesh`].
+    pub fn sampled(mesh: &Mesh, target: usize, sampling: Sampling) -> Result<Self, Error> {
         let (lo, hi) = mesh.bbox();
         let ext = hi - lo;
         if ext.min_element() <= 0.0 || !ext.is_finite() {
@@ -84,7 +121,16 @@ impl Grid {
         // and too many samples cost more downstream than the retry does.
         let full = inside::column_budget(max_cells);
         let mut budget = full;
-        let mut grid = Self::from_mesh_with_h(mesh, h, max_cells, &mut budget)?;
+        let adaptive = sampling == Sampling::Adaptive;
+        if adaptive {
+            // The blocks gather most of a thick solid's cells: start finer.
+            h *= ADAPTIVE_START;
+        }
+        let build = |h: f64, budget: &mut u64| {
+            let g = Self::from_mesh_with_h(mesh, h, max_cells, budget)?;
+            Ok::<_, Error>(if adaptive { g.into_blocks() } else { g })
+        };
+        let mut grid = build(h, &mut budget)?;
         for _ in 0..3 {
             let n = grid.points.len() as f64;
             let ratio = n / target;
@@ -94,9 +140,16 @@ impl Grid {
             if ratio > 1.0 {
                 budget = full;
             }
-            // A thin solid can hide between cell centres: shrink h until it shows up.
-            h *= if n == 0.0 { 0.25 } else { math::cbrt(ratio) };
-            match Self::from_mesh_with_h(mesh, h, max_cells, &mut budget) {
+            // A thin solid can hide between cell centres: shrink h until it shows up. Blocked
+            // samples grow slower than the cells as h shrinks (the blocks' cells not at all).
+            h *= if n == 0.0 {
+                0.25
+            } else if adaptive {
+                ratio.powf(0.4)
+            } else {
+                math::cbrt(ratio)
+            };
+            match build(h, &mut budget) {
                 Ok(g) => grid = g,
                 // A finer lattice would cost too much: keep the samples found so far.
                 Err(Error::TooComplex(_)) if n > 0.0 => break,
@@ -176,9 +229,12 @@ impl Grid {
             h,
             dims,
             sample_of_cell,
+            cells: coords.len(),
             coords,
             points,
-            neighbors: Vec::new(),
+            sides: Vec::new(),
+            neighbor_list: Vec::new(),
+            neighbor_start: Vec::new(),
             inside_runs: Default::default(),
         };
         grid.inside_runs = [
@@ -187,21 +243,171 @@ impl Grid {
         ];
         // Freed before the neighbour lists, the largest array, are built.
         drop(offset_inside);
-        grid.neighbors = (0..grid.points.len())
-            .map(|s| {
-                let [i, j, k] = grid.coords[s];
-                let (i, j, k) = (i as i64, j as i64, k as i64);
-                [
-                    grid.sample_at(i - 1, j, k),
-                    grid.sample_at(i + 1, j, k),
-                    grid.sample_at(i, j - 1, k),
-                    grid.sample_at(i, j + 1, k),
-                    grid.sample_at(i, j, k - 1),
-                    grid.sample_at(i, j, k + 1),
-                ]
-            })
-            .collect();
+        let mut list = Vec::with_capacity(6 * grid.points.len());
+        for s in 0..grid.points.len() {
+            let [i, j, k] = grid.coords[s].map(i64::from);
+            list.extend([
+                grid.sample_at(i - 1, j, k),
+                grid.sample_at(i + 1, j, k),
+                grid.sample_at(i, j - 1, k),
+                grid.sample_at(i, j + 1, k),
+                grid.sample_at(i, j, k - 1),
+                grid.sample_at(i, j, k + 1),
+            ]);
+        }
+        grid.neighbor_list = list;
         grid
+    }
+
+    /// This regular grid with its thick inside gathered into blocks, as adaptive sampling
+    /// does (see the module's docs): a block of side `b` (4, then 2), aligned to multiples
+    /// of `b`, becomes one sample when all its cells are inside and none lies nearer the
+    /// boundary than [`BLOCK_DEPTH`] times `b` cells. Samples are numbered in the order of
+    /// their first cell along the lattice (x fastest), as the regular grid's are.
+    #[must_use]
+    pub fn into_blocks(self) -> Self {
+        let depth = distance::cell_depths(&self);
+        let [nx, ny, nz] = self.dims;
+        let cell = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+        // The side of the block each inside cell joins (0: outside), and the block's first
+        // cell.
+        let mut side = vec![0u8; nx * ny * nz];
+        let mut first = vec![u32::MAX; nx * ny * nz];
+        for c in &self.coords {
+            let [i, j, k] = c.map(|x| x as usize);
+            side[cell(i, j, k)] = 1;
+        }
+        for b in [4usize, 2] {
+            // Squared depths are compared exactly, in cells squared.
+            let need = ((BLOCK_DEPTH * b) * (BLOCK_DEPTH * b)) as u32;
+            for k0 in (0..nz.saturating_sub(b - 1)).step_by(b) {
+                for j0 in (0..ny.saturating_sub(b - 1)).step_by(b) {
+                    for i0 in (0..nx.saturating_sub(b - 1)).step_by(b) {
+                        let block = || {
+                            (k0..k0 + b).flat_map(move |k| {
+                                (j0..j0 + b).flat_map(move |j| (i0..i0 + b).map(move |i| (i, j, k)))
+                            })
+                        };
+                        let deep = block().all(|(i, j, k)| {
+                            let c = cell(i, j, k);
+                            side[c] == 1 && depth[c] >= need
+                        });
+                        if deep {
+                            for (i, j, k) in block() {
+                                side[cell(i, j, k)] = b as u8;
+                                first[cell(i, j, k)] = cell(i0, j0, k0) as u32;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        drop(depth);
+        let mut sample_of_cell = vec![NONE; nx * ny * nz];
+        let (mut coords, mut points, mut sides) = (Vec::new(), Vec::new(), Vec::new());
+        for c in 0..nx * ny * nz {
+            let b = side[c];
+            if b == 0 {
+                continue;
+            }
+            let at = if b == 1 { c } else { first[c] as usize };
+            if at == c {
+                let ijk = [at % nx, (at / nx) % ny, at / (nx * ny)];
+                sample_of_cell[c] = points.len() as u32;
+                coords.push(ijk.map(|x| x as u32));
+                let mid = 0.5 * f64::from(b - 1);
+                let p = DVec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) + mid;
+                points.push(self.origin + self.h * p);
+                sides.push(b);
+            } else {
+                sample_of_cell[c] = sample_of_cell[at];
+            }
+        }
+        drop(side);
+        drop(first);
+        let mut grid = Self {
+            sample_of_cell,
+            coords,
+            points,
+            sides,
+            neighbor_list: Vec::new(),
+            neighbor_start: Vec::new(),
+            ..self
+        };
+        let mut start = Vec::with_capacity(grid.points.len() + 1);
+        let mut list = Vec::new();
+        for s in 0..grid.points.len() {
+            start.push(list.len() as u32);
+            let b = i64::from(grid.sides[s]);
+            let c = grid.coords[s].map(i64::from);
+            for axis in 0..3 {
+                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                for at in [c[axis] - 1, c[axis] + b] {
+                    let from = list.len();
+                    for du in 0..b {
+                        for dv in 0..b {
+                            let mut p = [0i64; 3];
+                            p[axis] = at;
+                            p[u] = c[u] + du;
+                            p[v] = c[v] + dv;
+                            let t = grid.sample_at(p[0], p[1], p[2]);
+                            if !list[from..].contains(&t) {
+                                list.push(t);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        start.push(list.len() as u32);
+        grid.neighbor_list = list;
+        grid.neighbor_start = start;
+        grid
+    }
+
+    /// The face neighbours of sample `s`: the samples of the cells across each face of its
+    /// cell or block, face by face (-x, +x, -y, +y, -z, +z), each once per face, [`NONE`]
+    /// for cells outside the solid. A single cell's list is its six face neighbours in that
+    /// order.
+    #[inline]
+    pub fn neighbors(&self, s: usize) -> &[u32] {
+        if self.neighbor_start.is_empty() {
+            &self.neighbor_list[6 * s..6 * s + 6]
+        } else {
+            let (a, b) = (self.neighbor_start[s], self.neighbor_start[s + 1]);
+            &self.neighbor_list[a as usize..b as usize]
+        }
+    }
+
+    /// How many cells along each axis sample `s` stands for (1 but for adaptive blocks).
+    #[inline]
+    pub fn side(&self, s: usize) -> u32 {
+        self.sides.get(s).map_or(1, |&b| u32::from(b))
+    }
+
+    /// The number of cells sample `s` stands for: its weight.
+    #[inline]
+    pub fn weight(&self, s: usize) -> u32 {
+        self.side(s).pow(3)
+    }
+
+    /// Whether some sample stands for more than one cell.
+    pub fn has_blocks(&self) -> bool {
+        self.sides.iter().any(|&b| b > 1)
+    }
+
+    /// The lattice cells of sample `s`, as cell coordinates (one, or a block's, x fastest).
+    pub fn cells_of(&self, s: usize) -> impl Iterator<Item = [u32; 3]> {
+        let b = self.side(s);
+        let [i, j, k] = self.coords[s];
+        (0..b).flat_map(move |dk| {
+            (0..b).flat_map(move |dj| (0..b).map(move |di| [i + di, j + dj, k + dk]))
+        })
+    }
+
+    /// Number of lattice cells inside the solid: the samples' weights summed.
+    pub fn cells(&self) -> usize {
+        self.cells
     }
 
     /// The lattice of twice the cell size over the same box, each of its cells a sample when
@@ -212,9 +418,11 @@ impl Grid {
         let [nx, ny, nz] = self.dims;
         let dims = [nx.div_ceil(2), ny.div_ceil(2), nz.div_ceil(2)];
         let mut mask = vec![false; dims[0] * dims[1] * dims[2]];
-        for c in &self.coords {
-            let [i, j, k] = c.map(|x| x as usize / 2);
-            mask[i + dims[0] * (j + dims[1] * k)] = true;
+        for s in 0..self.len() {
+            for c in self.cells_of(s) {
+                let [i, j, k] = c.map(|x| x as usize / 2);
+                mask[i + dims[0] * (j + dims[1] * k)] = true;
+            }
         }
         let od = offset_dims(dims);
         Self::from_masks(
@@ -316,10 +524,89 @@ mod tests {
         let n = g.len() as f64;
         assert!((n - expected).abs() / expected < 0.02, "{n} vs {expected}");
         // Neighbour relation is symmetric.
-        for (s, nb) in g.neighbors.iter().enumerate() {
-            for (d, &t) in nb.iter().enumerate() {
+        for s in 0..g.len() {
+            for (d, &t) in g.neighbors(s).iter().enumerate() {
                 if t != NONE {
-                    assert_eq!(g.neighbors[t as usize][d ^ 1], s as u32);
+                    assert_eq!(g.neighbors(t as usize)[d ^ 1], s as u32);
+                }
+            }
+        }
+    }
+
+    /// The blocks of adaptive sampling tile the same cells as the regular grid, each cell
+    /// once; they lie deep inside; neighbours are symmetric and are exactly the samples of
+    /// the cells across a sample's faces.
+    #[test]
+    fn blocks_tile_the_cells_deep_inside_with_symmetric_neighbours() {
+        let inside = |p: DVec3| p.length() <= 1.0 && (p - DVec3::new(0.0, 0.0, 0.6)).length() > 0.3;
+        let regular = Grid::from_inside_fn(DVec3::splat(-1.0), DVec3::splat(1.0), 0.05, inside);
+        let g = regular.clone().into_blocks();
+        assert!(g.has_blocks());
+        assert!(
+            g.len() < regular.len() / 2,
+            "{} of {}",
+            g.len(),
+            regular.len()
+        );
+        assert_eq!(g.cells(), regular.len());
+        let weights: usize = (0..g.len()).map(|s| g.weight(s) as usize).sum();
+        assert_eq!(weights, regular.len());
+        assert!((0..g.len()).any(|s| g.side(s) == 4) && (0..g.len()).any(|s| g.side(s) == 2));
+        // Every cell of the regular grid belongs to the one sample that lists it.
+        let mut owner = vec![NONE; g.sample_of_cell.len()];
+        let [nx, ny, _] = g.dims;
+        for s in 0..g.len() {
+            for [i, j, k] in g.cells_of(s) {
+                let c = i as usize + nx * (j as usize + ny * k as usize);
+                assert_eq!(owner[c], NONE, "cell {c} twice");
+                owner[c] = s as u32;
+                assert_eq!(g.sample_of_cell[c], s as u32);
+            }
+        }
+        for c in 0..owner.len() {
+            assert_eq!(owner[c] != NONE, regular.sample_of_cell[c] != NONE);
+        }
+        // Blocks keep the boundary layers as single cells: their centres are deep.
+        let depth = distance::boundary_distance(&g);
+        for s in 0..g.len() {
+            let b = f64::from(g.side(s));
+            if b > 1.0 {
+                let need = (BLOCK_DEPTH as f64) * b + 0.5 * (b - 1.0);
+                assert!(
+                    depth[s] >= need,
+                    "sample {s} of side {b} at depth {}",
+                    depth[s]
+                );
+                assert_eq!(g.coords[s].map(|x| x % g.side(s)), [0; 3]);
+            }
+        }
+        for s in 0..g.len() {
+            // The samples across the faces, cell by cell.
+            let mut across: Vec<u32> = Vec::new();
+            for [i, j, k] in g.cells_of(s) {
+                let (i, j, k) = (i64::from(i), i64::from(j), i64::from(k));
+                for t in [
+                    g.sample_at(i - 1, j, k),
+                    g.sample_at(i + 1, j, k),
+                    g.sample_at(i, j - 1, k),
+                    g.sample_at(i, j + 1, k),
+                    g.sample_at(i, j, k - 1),
+                    g.sample_at(i, j, k + 1),
+                ] {
+                    if t != s as u32 {
+                        across.push(t);
+                    }
+                }
+            }
+            across.sort_unstable();
+            across.dedup();
+            let mut listed = g.neighbors(s).to_vec();
+            listed.sort_unstable();
+            listed.dedup();
+            assert_eq!(listed, across, "sample {s}");
+            for &t in g.neighbors(s) {
+                if t != NONE {
+                    assert!(g.neighbors(t as usize).contains(&(s as u32)));
                 }
             }
         }

@@ -15,7 +15,8 @@
 //!
 //! The links of this skeleton seed the start as a given skeleton's would ([`super::seeds`]);
 //! they bind no bones.
-use std::collections::VecDeque;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 use glam::{DMat4, DVec3};
 
@@ -46,25 +47,35 @@ pub fn curve_skeleton(solid: &Solid) -> Skeleton {
             root[c] = s;
         }
     }
-    // Geodesic distance in cells along the face-neighbour graph, from every piece's root.
+    // Geodesic distance in half cells along the face-neighbour graph, from every piece's
+    // root: a step between samples is as long as half their sides summed (one cell between
+    // single cells, more to and from the blocks of adaptive sampling).
     let mut geo = vec![u32::MAX; n];
-    let mut queue = VecDeque::new();
+    let mut queue = BinaryHeap::new();
     for &r in root.iter().filter(|&&r| r != usize::MAX) {
         geo[r] = 0;
-        queue.push_back(r);
+        queue.push(Reverse((0u32, r)));
     }
-    while let Some(s) = queue.pop_front() {
-        for &t in &g.neighbors[s] {
-            if t != NONE && geo[t as usize] == u32::MAX {
-                geo[t as usize] = geo[s] + 1;
-                queue.push_back(t as usize);
+    while let Some(Reverse((d, s))) = queue.pop() {
+        if d > geo[s] {
+            continue;
+        }
+        for &t in g.neighbors(s) {
+            if t == NONE {
+                continue;
+            }
+            let t = t as usize;
+            let to = d + g.side(s) + g.side(t);
+            if to < geo[t] {
+                geo[t] = to;
+                queue.push(Reverse((to, t)));
             }
         }
     }
     let band_of = |s: usize| {
         let c = solid.components[s] as usize;
         let w = (thickness[root[c]].round() as u32).max(MIN_BAND);
-        geo[s] / w
+        geo[s] / (2 * w)
     };
     let band: Vec<u32> = (0..n).map(band_of).collect();
     // The connected regions of each band, numbered by their first sample.
@@ -81,7 +92,7 @@ pub fn curve_skeleton(solid: &Solid) -> Skeleton {
         while at < list.len() {
             let x = list[at] as usize;
             at += 1;
-            for &t in &g.neighbors[x] {
+            for &t in g.neighbors(x) {
                 let t = t as usize;
                 if t != NONE as usize && region[t] == u32::MAX && band[t] == band[x] {
                     region[t] = r;
@@ -95,7 +106,7 @@ pub fn curve_skeleton(solid: &Solid) -> Skeleton {
     // Links from each region to the regions of the next band out that it touches.
     let mut edges: Vec<(u32, u32)> = Vec::new();
     for s in 0..n {
-        for &t in &g.neighbors[s] {
+        for &t in g.neighbors(s) {
             if t != NONE && band[t as usize] == band[s] + 1 {
                 edges.push((region[s], region[t as usize]));
             }
@@ -115,7 +126,11 @@ pub fn curve_skeleton(solid: &Solid) -> Skeleton {
     }
     let centroid: Vec<DVec3> = members
         .iter()
-        .map(|m| m.iter().map(|&s| g.points[s as usize]).sum::<DVec3>() / m.len() as f64)
+        .map(|m| {
+            let w = |s: u32| f64::from(g.weight(s as usize));
+            let sum: DVec3 = m.iter().map(|&s| w(s) * g.points[s as usize]).sum();
+            sum / m.iter().map(|&s| w(s)).sum::<f64>()
+        })
         .collect();
     // Fold small regions and regions centred near their parent into the parent. Parents
     // come from earlier bands, so visiting regions by band folds each chain from its root.
