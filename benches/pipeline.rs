@@ -200,7 +200,7 @@ fn bench_assign(c: &mut Criterion) {
             let (solid, metrics, all, cand) = prep.get_or_init(setup);
             // The whole timing loop runs inside the pool, so `assign`'s parallel iterator
             // uses exactly `threads` workers and no per-call injection cost is measured.
-            pool.install(|| b.iter(|| assign(&solid.q, all, metrics, cand, Rule::Paper)))
+            pool.install(|| b.iter(|| assign(solid, all, metrics, cand, Rule::Paper)))
         });
     }
     g.finish();

@@ -7,7 +7,7 @@
 use glam::DVec3;
 
 use crate::moments::{inv_packed, quad_packed, Moments};
-use crate::partition::CELL_VAR;
+use crate::partition::{Solid, CELL_VAR};
 
 /// Which first-order rule ranks the parts for a sample.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,6 +58,26 @@ impl PartMetric {
         quad_packed(&self.inv, q - self.mu)
     }
 
+    /// The cost of sample `s` of `solid` joining this part under `rule`, per cell: for a
+    /// block of adaptive sampling, the mean of its cells' costs, whose Mahalanobis distances
+    /// exceed its centre's by the block's spread along each axis.
+    #[inline]
+    pub fn cost_of(&self, solid: &Solid, s: usize, rule: Rule) -> f64 {
+        let q = solid.q[s];
+        match solid.grid.side(s) {
+            1 => self.cost(q, rule),
+            b => {
+                let b = f64::from(b);
+                let spread = (b * b - 1.0) / 12.0 * (self.inv[0] + self.inv[1] + self.inv[2]);
+                match rule {
+                    Rule::Paper => self.e * (self.d(q) + spread),
+                    Rule::Corrected => self.e * (self.d(q) + spread - 3.0),
+                    Rule::Euclidean => self.cost(q, rule),
+                }
+            }
+        }
+    }
+
     /// The cost of `q` joining this part under `rule`.
     #[inline]
     pub fn cost(&self, q: DVec3, rule: Rule) -> f64 {
@@ -80,7 +100,7 @@ impl PartMetric {
 /// the parts it touches confines the search to where a sample can go without leaving its
 /// part's neighbourhood, which is all a connected partition allows anyway.
 pub fn assign_local(
-    q: &[DVec3],
+    solid: &Solid,
     samples: &[u32],
     labels: &[u32],
     metrics: &[PartMetric],
@@ -89,30 +109,36 @@ pub fn assign_local(
 ) -> Vec<u32> {
     crate::parallel::map_chunked(samples, 1024, |&s| {
         let own = labels[s as usize];
-        cheapest(q[s as usize], &candidates[own as usize], metrics, rule).unwrap_or(own)
+        cheapest(solid, s as usize, &candidates[own as usize], metrics, rule).unwrap_or(own)
     })
 }
 
 /// For each sample in `samples`, the candidate part of least cost (ties: the first listed).
 pub fn assign(
-    q: &[DVec3],
+    solid: &Solid,
     samples: &[u32],
     metrics: &[PartMetric],
     candidates: &[u32],
     rule: Rule,
 ) -> Vec<u32> {
     crate::parallel::map_chunked(samples, 1024, |&s| {
-        cheapest(q[s as usize], candidates, metrics, rule).unwrap_or(candidates[0])
+        cheapest(solid, s as usize, candidates, metrics, rule).unwrap_or(candidates[0])
     })
 }
 
-/// The candidate of least finite cost for `x` (the first on ties), if any.
+/// The candidate of least finite cost for sample `s` (the first on ties), if any.
 #[inline]
-fn cheapest(x: DVec3, candidates: &[u32], metrics: &[PartMetric], rule: Rule) -> Option<u32> {
+fn cheapest(
+    solid: &Solid,
+    s: usize,
+    candidates: &[u32],
+    metrics: &[PartMetric],
+    rule: Rule,
+) -> Option<u32> {
     let mut best = None;
     let mut best_cost = f64::INFINITY;
     for &j in candidates {
-        let c = metrics[j as usize].cost(x, rule);
+        let c = metrics[j as usize].cost_of(solid, s, rule);
         if c < best_cost {
             best_cost = c;
             best = Some(j);
@@ -139,8 +165,13 @@ mod tests {
             }
         }
         let m = [PartMetric::new(&a), PartMetric::new(&b)];
-        let q = [DVec3::new(21.0, 0.0, 0.0)];
-        assert_eq!(assign(&q, &[0], &m, &[0, 1], Rule::Paper), vec![0]);
-        assert_eq!(assign(&q, &[0], &m, &[0, 1], Rule::Euclidean), vec![1]);
+        let q = DVec3::new(21.0, 0.0, 0.0);
+        let best = |rule| {
+            (0..2)
+                .min_by(|&i: &usize, &j| m[i].cost(q, rule).total_cmp(&m[j].cost(q, rule)))
+                .unwrap()
+        };
+        assert_eq!(best(Rule::Paper), 0);
+        assert_eq!(best(Rule::Euclidean), 1);
     }
 }

@@ -101,11 +101,11 @@ pub fn cvt(solid: &Solid, k: usize, seed: u64) -> Partition {
             PartMetric::new(&m)
         })
         .collect();
-    let mut labels = assign(&solid.q, &all, &metrics, &cand, Rule::Euclidean);
+    let mut labels = assign(solid, &all, &metrics, &cand, Rule::Euclidean);
     let mut part = Partition::from_labels(solid, labels.clone(), k);
     for _ in 0..CVT_ITERATIONS {
         make_connected(&solid.grid, &mut labels, &solid.components, None, |s, j| {
-            metrics[j as usize].cost(solid.q[s], Rule::Euclidean)
+            metrics[j as usize].cost_of(solid, s, Rule::Euclidean)
         });
         let next = Partition::from_labels(solid, labels.clone(), k);
         let stable = next == part;
@@ -114,7 +114,7 @@ pub fn cvt(solid: &Solid, k: usize, seed: u64) -> Partition {
             break;
         }
         metrics = part.parts.iter().map(PartMetric::new).collect();
-        labels = assign(&solid.q, &all, &metrics, &cand, Rule::Euclidean);
+        labels = assign(solid, &all, &metrics, &cand, Rule::Euclidean);
     }
     drop_empty_parts(&mut part);
     part

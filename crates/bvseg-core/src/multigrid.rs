@@ -55,7 +55,7 @@ fn carried(solid: &Solid, coarse: &Solid, rough: &Partition) -> Partition {
     let first = Partition::from_labels(solid, labels.clone(), rough.k());
     let metrics: Vec<PartMetric> = first.parts.iter().map(PartMetric::new).collect();
     make_connected(g, &mut labels, &solid.components, None, |s, j| {
-        metrics[j as usize].cost(solid.q[s], Rule::Euclidean)
+        metrics[j as usize].cost_of(solid, s, Rule::Euclidean)
     });
     let mut part = Partition::from_labels(solid, labels, rough.k());
     drop_empty_parts(&mut part);

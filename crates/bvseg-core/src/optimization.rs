@@ -101,7 +101,7 @@ pub fn lloyd(
         };
         let band = if sweep >= 2 { band } else { samples.clone() };
         let best = if sweep == 0 || candidates.len() <= 4 {
-            assign(&solid.q, &band, &metrics, &candidates, rule)
+            assign(solid, &band, &metrics, &candidates, rule)
         } else {
             let mut near: Vec<Vec<u32>> = (0..k as u32).map(|i| vec![i]).collect();
             for (a, b) in pairs {
@@ -110,7 +110,7 @@ pub fn lloyd(
                     near[b as usize].push(a);
                 }
             }
-            assign_local(&solid.q, &band, &part.labels, &metrics, &near, rule)
+            assign_local(solid, &band, &part.labels, &metrics, &near, rule)
         };
         let mut touched = Vec::new();
         for (&s, &l) in band.iter().zip(&best) {
@@ -143,7 +143,7 @@ pub fn lloyd(
                 Some(&scope),
                 |s, j| {
                     if is_active[j as usize] {
-                        metrics[j as usize].cost(solid.q[s], rule)
+                        metrics[j as usize].cost_of(solid, s, rule)
                     } else {
                         f64::INFINITY
                     }

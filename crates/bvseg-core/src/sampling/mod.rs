@@ -28,6 +28,8 @@ mod shells;
 
 pub use runs::InsideRuns;
 
+use std::sync::OnceLock;
+
 use crate::math;
 use glam::DVec3;
 
@@ -70,6 +72,9 @@ pub struct Grid {
     neighbor_start: Vec<u32>,
     /// Number of inside cells (the samples' weights summed).
     cells: usize,
+    /// Each sample's distance to the boundary, computed when first asked for (see
+    /// [`Grid::boundary_distance`]).
+    depth: OnceLock<Vec<f64>>,
     /// The inside cells of the sampling lattice and of the offset one, as runs per column
     /// (for counting and listing a volume's outside cells column by column). Cell `(i, j, k)`
     /// of the offset lattice (`0 <= i <= nx` and so on) has its centre at
@@ -230,6 +235,7 @@ impl Grid {
             dims,
             sample_of_cell,
             cells: coords.len(),
+            depth: OnceLock::new(),
             coords,
             points,
             sides: Vec::new(),
@@ -332,6 +338,7 @@ impl Grid {
             sides,
             neighbor_list: Vec::new(),
             neighbor_start: Vec::new(),
+            depth: OnceLock::new(),
             ..self
         };
         let mut start = Vec::with_capacity(grid.points.len() + 1);
@@ -408,6 +415,13 @@ impl Grid {
     /// Number of lattice cells inside the solid: the samples' weights summed.
     pub fn cells(&self) -> usize {
         self.cells
+    }
+
+    /// Each sample's distance to the solid's boundary, in cells (see
+    /// [`distance::boundary_distance`]): computed once, when first asked for, and kept with
+    /// the samples.
+    pub fn boundary_distance(&self) -> &[f64] {
+        self.depth.get_or_init(|| distance::boundary_distance(self))
     }
 
     /// The lattice of twice the cell size over the same box, each of its cells a sample when

@@ -21,7 +21,6 @@ use std::collections::BinaryHeap;
 use glam::{DMat4, DVec3};
 
 use crate::partition::Solid;
-use crate::sampling::distance::boundary_distance;
 use crate::sampling::NONE;
 use crate::{Joint, Skeleton};
 
@@ -38,7 +37,7 @@ pub fn curve_skeleton(solid: &Solid) -> Skeleton {
     if n == 0 {
         return Skeleton::default();
     }
-    let thickness = boundary_distance(g);
+    let thickness = g.boundary_distance();
     // The root of each piece: its thickest sample, the first on ties.
     let mut root = vec![usize::MAX; solid.pieces];
     for s in 0..n {
