@@ -21,6 +21,12 @@ KINDS = ["ellipsoid", "obb", "sphere", "capsule", "cylinder", "hull", "default"]
 KS = [4, 8, 16, 32, 64]
 SAMPLES = [10_000, 100_000, 1_000_000, 5_000_000]
 QUICK_MESHES = ["bunny", "spot", "fourleg_2"]
+# The paper's section 6 (skeleton-seeded start, adaptive sampling) against the plain start on a
+# regular lattice: what each start costs and gives, on a human, a hand and a four-legged animal.
+STARTS = {"default": [], "--skeleton none --sampling regular": ["--skeleton", "none", "--sampling", "regular"],
+          "--sampling adaptive": ["--sampling", "adaptive"], "--skeleton auto": ["--skeleton", "auto"],
+          "--skeleton auto --sampling adaptive": ["--skeleton", "auto", "--sampling", "adaptive"]}
+SECTION6_MESHES = ["human_1", "hand_1", "fourleg_1"]
 
 
 def venv_python():
@@ -93,6 +99,8 @@ class Bench:
         for m in meshes:
             print(f"quality: {Path(m).stem}", file=sys.stderr)
             rows.append(self.bvseg_run(m, "bvseg", []))
+            for name in ("--sampling adaptive", "--skeleton auto"):
+                rows.append(self.bvseg_run(m, name, STARTS[name]))
             for t in TARGETS:
                 rows.append(self.bvseg_run(m, f"--target {t}", ["--target", t]))
             co = self.peer(m, "coacd", 1)
@@ -115,6 +123,21 @@ class Bench:
                 by[(kind, k)] = statistics.median(tovs)
                 print(f"kinds: {kind} k={k} TOV {by[(kind, k)]:.3f}", file=sys.stderr)
         return by
+
+    def starts(self, meshes, rounds):
+        """Each start of STARTS on each mesh, `rounds` times alternating; median times."""
+        rows = []
+        for m in meshes:
+            walls = {n: [] for n in STARTS}
+            for _ in range(rounds):
+                for n, args in STARTS.items():
+                    walls[n].append(run([self.bvseg, "segment", m, "-q", "-o", self.out / "start.json"] + args)[0])
+            for n, args in STARTS.items():
+                r = self.bvseg_run(m, n, args)
+                r["s"] = statistics.median(walls[n])
+                rows.append(r)
+                print(f"starts: {Path(m).stem} {n}: {r['s']:.2f} s, TOV {r['tov']:.3f}", file=sys.stderr)
+        return rows
 
     def speed(self, mesh, samples):
         rows = []
@@ -179,7 +202,7 @@ def machine():
     return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
 
 
-def report(a, rows, kinds, speed, page, plots):
+def report(a, rows, kinds, starts, speed, page, plots):
     git = lambda *c: subprocess.run(["git", *c], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     cmd = "python3 scripts/benchmarks.py" + (" --quick" if a.quick else "") + (" --page" if a.page else "")
     L = ["# bvseg benchmarks", "",
@@ -218,6 +241,14 @@ def report(a, rows, kinds, speed, page, plots):
           "|---|" + "---:|" * len(KS)]
     for kind in KINDS:
         L.append(f"| {kind} | " + " | ".join(f"{kinds[(kind, k)]:.3f}" for k in KS) + " |")
+    L += ["", "## Skeleton-seeded start and adaptive sampling (the paper's section 6)", "",
+          f"Each start on {', '.join(Path(m).stem for m in a.start_meshes)}: whole CLI process, median of"
+          f" {a.rounds} runs alternating between the starts; TOV and protrusion (max, over the diagonal) by the"
+          " judge. `ratio`: time over `--skeleton none --sampling regular`'s on the same mesh.", "",
+          "| mesh | start | k | TOV | protr. max | s | ratio |", "|---|---|---:|---:|---:|---:|---:|"]
+    base = {r["mesh"]: r["s"] for r in starts if r["run"] == "--skeleton none --sampling regular"}
+    L += [f"| {r['mesh']} | {r['run']} | {r['k']} | {r['tov']:.3f} | {r['pmax']:.4f} | {r['s']:.2f} | "
+          f"{r['s'] / base[r['mesh']]:.2f} |" for r in starts]
     L += ["", "## Speed against the number of samples", "",
           f"`bvseg segment {a.speed_mesh} --samples N --k 64`, one process each (peak resident memory by"
           " GNU time):", "", f"![time against samples]({plots[1]})", "", "| samples | s | peak MB |",
@@ -251,9 +282,11 @@ def main():
     if a.quick:
         meshes = [ROOT / f"assets/meshes/{m}.obj" for m in QUICK_MESHES]
         a.kind_meshes, samples = ["bunny"], SAMPLES[:2]
+        a.start_meshes, a.rounds = [ROOT / "assets/meshes/spot.obj"], 1
     else:
         meshes = sorted((SHARED / "meshes").glob("*.obj"))
         a.kind_meshes, samples = ["bunny", "human_1", "chair_1"], SAMPLES
+        a.start_meshes, a.rounds = [SHARED / f"meshes/{m}.obj" for m in SECTION6_MESHES], 3
     a.speed_mesh = "assets/meshes/bunny.obj"
     b = Bench(a)
     rows = b.quality(meshes)
@@ -261,6 +294,7 @@ def main():
     kind_paths = [m if m.exists() else SHARED / f"meshes/{m.name}"
                   for m in (ROOT / f"assets/meshes/{n}.obj" for n in a.kind_meshes)]
     kinds = b.kinds(kind_paths)
+    starts = b.starts(a.start_meshes, a.rounds)
     speed = b.speed(ROOT / a.speed_mesh, samples)
     page = b.page() if a.page else None
     out = Path(a.out) if a.out else (b.out / "QUICK.md" if a.quick else ROOT / "BENCHMARKS.md")
@@ -271,7 +305,7 @@ def main():
     svg_plot(plots[1], "Time against samples (k = 64)", "samples", "seconds",
              {"bvseg": [(r["n"], r["s"]) for r in speed]}, logx=True, logy=True)
     rel = [os.path.relpath(p, out.parent) for p in plots]
-    out.write_text(report(a, rows, kinds, speed, page, rel))
+    out.write_text(report(a, rows, kinds, starts, speed, page, rel))
     print(f"benchmarks.py: wrote {out} ({len(out.read_text().splitlines())} lines)", file=sys.stderr)
     bad = [r for r in rows if r["run"].startswith(("bvseg", "--")) and r["surface"] < 1.0]
     if bad:
