@@ -8,6 +8,7 @@
 //! links, MJCF includes do not cycle.
 mod curobo;
 mod mjcf;
+mod run;
 mod urdf;
 
 use std::ops::Range;
@@ -20,7 +21,52 @@ use crate::{IoError, LoadOptions, LoadedMesh};
 
 pub use curobo::to_curobo;
 pub use mjcf::to_mjcf_robot;
+pub use run::{
+    segment_robot, RobotError, RobotEvent, RobotOptions, RobotRun, DEFAULT_SPHERES_PER_LINK,
+    DONE_FILE,
+};
 pub use urdf::to_urdf;
+
+/// The robot file extensions [`read_robot`] reads (compared case-insensitively): `.urdf`,
+/// and `.xml` (or `.mjcf`) for MJCF.
+pub const ROBOT_EXTENSIONS: &[&str] = &["urdf", "xml", "mjcf"];
+
+/// The kind of robot file `path` is, reading no more than its start: a `.urdf` file, or an
+/// `.xml` or `.mjcf` file whose root element is `<mujoco>` and that bvseg did not write (its
+/// MJCF outputs open with its generator comment). `None` for anything else, and for a file
+/// that cannot be read. For listing a directory; [`read_robot`] does not need it.
+pub fn robot_format(path: &Path) -> Option<RobotFormat> {
+    use std::io::Read;
+    match crate::extension(path).as_deref() {
+        Some("urdf") => return path.is_file().then_some(RobotFormat::Urdf),
+        Some("xml") | Some("mjcf") => {}
+        _ => return None,
+    }
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .ok()?;
+    let text = String::from_utf8_lossy(&head);
+    let mut rest = text.trim_start_matches('\u{feff}').trim_start();
+    // The prolog: declarations, comments, a doctype.
+    while let Some(r) = rest.strip_prefix("<?").or_else(|| rest.strip_prefix("<!")) {
+        let end = if r.starts_with("--") {
+            r.find("-->")? + 3
+        } else {
+            r.find('>')? + 1
+        };
+        rest = r[end..].trim_start();
+    }
+    let tag = rest.strip_prefix("<mujoco")?;
+    if !tag.starts_with(|c: char| c.is_whitespace() || c == '>' || c == '/') {
+        return None;
+    }
+    let after = tag[tag.find('>')? + 1..].trim_start();
+    // Any version's: `GENERATOR` is "bvseg <version>".
+    (!after.starts_with("<!-- bvseg ")).then_some(RobotFormat::Mjcf)
+}
 
 /// The kind of robot file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
