@@ -18,10 +18,14 @@ ellipsoid, box, and mesh geoms that are convex (each vertex on the hull MuJoCo c
 it), each in its own frame. MuJoCo keeps mesh vertices in float32, so a vertex may stick out
 by its rounding: the test allows 1e-6 of the diagonal of the body's vertices.
 
+Also: each body of NEW sits where the body of ORIGINAL with its name does, both in their
+reference pose (qpos0), within 1e-6 (length units and radians); a URDF, which has no place for
+its root link's pose in the world, is compared relative to its root. And NEW steps.
+
 Prints one line per body (vertices, enclosed fraction, geoms by type) and `worst_enclosed`,
 `new_mesh_collisions` (NEW's colliding mesh geoms that are not convex); exits 1 when a body
-encloses less than 1.0, a collision mesh is left in NEW, or NEW does not step; 2 when a file
-does not load.
+encloses less than 1.0, a collision mesh is left in NEW, a body is misplaced or NEW does not
+step, or ORIGINAL has no collision mesh; 2 when a file does not load.
 """
 import argparse
 import json
@@ -38,6 +42,8 @@ except ImportError:  # pragma: no cover - the caller installs it
     sys.exit("check_robot.py: needs MuJoCo's Python package (pip install mujoco)")
 
 REL_SLACK = 1e-6
+# Body positions (metres, or the model's unit) and angles (radians) in the reference pose.
+PLACE_TOL = 1e-6
 TYPES = {
     int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
     int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule",
@@ -194,8 +200,48 @@ def new_geoms(m):
     return out, nonconvex
 
 
+def poses(m, relative):
+    """{body name: (position, quaternion)} in the reference pose (qpos0): in the world, or
+    with `relative` in the frame of the body's root body."""
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    out = {}
+    for b in range(1, m.nbody):
+        pos, quat = np.array(d.xpos[b]), np.array(d.xquat[b])
+        if relative:
+            r = m.body_rootid[b]
+            inv = np.zeros(4)
+            mujoco.mju_negQuat(inv, d.xquat[r])
+            p, q = np.zeros(3), np.zeros(4)
+            mujoco.mju_rotVecQuat(p, pos - d.xpos[r], inv)
+            mujoco.mju_mulQuat(q, inv, quat)
+            pos, quat = p, q
+        out[body_name(m, b)] = (pos, quat)
+    return out
+
+
+def body_offsets(mo, mn, relative):
+    """The largest distance and angle between a body of ORIGINAL and the body of NEW with its
+    name, both models in their reference pose (qpos0)."""
+    po, pn = poses(mo, relative), poses(mn, relative)
+    dist, angle = 0.0, 0.0
+    for name, (p, q) in po.items():
+        if name not in pn:
+            continue
+        p2, q2 = pn[name]
+        dist = max(dist, float(np.linalg.norm(p - p2)))
+        # The angle of q^-1 q2, from its vector part (acos near 1 would lose half the digits).
+        inv, rel = np.zeros(4), np.zeros(4)
+        mujoco.mju_negQuat(inv, q)
+        mujoco.mju_mulQuat(rel, inv, q2)
+        angle = max(angle, 2 * float(np.arctan2(np.linalg.norm(rel[1:]), abs(rel[0]))))
+    return dist, angle
+
+
 def check(original, new, source):
     mo, mn = load(original), load(new)
+    # A URDF has no place for its root link's pose in the world: compare within each tree.
+    offset, turn = body_offsets(mo, mn, new.lower().endswith(".urdf"))
     data = mujoco.MjData(mn)
     for _ in range(10):
         mujoco.mj_step(mn, data)
@@ -225,6 +271,8 @@ def check(original, new, source):
         "new_mesh_collisions": nonconvex,
         "new_geoms": int(mn.ngeom),
         "steps": steps_ok,
+        "body_offset": offset,
+        "body_angle": turn,
     }
 
 
@@ -247,8 +295,10 @@ def main():
             kinds = ", ".join(f"{n} {k}" for k, n in sorted(link["geoms"].items()))
             print(f"{name}: {link['vertices']} vertices, enclosed {link['enclosed']:.6f} ({kinds or 'no geoms'})")
         print(f"worst_enclosed {r['worst_enclosed']}, new_mesh_collisions {r['new_mesh_collisions']}, "
-              f"new geoms {r['new_geoms']}, steps {'ok' if r['steps'] else 'NOT finite'}")
-    ok = r["links"] and r["worst_enclosed"] >= 1.0 and r["new_mesh_collisions"] == 0 and r["steps"]
+              f"new geoms {r['new_geoms']}, steps {'ok' if r['steps'] else 'NOT finite'}, "
+              f"bodies placed within {r['body_offset']:.2g} and {r['body_angle']:.2g} rad")
+    placed = r["body_offset"] <= PLACE_TOL and r["body_angle"] <= PLACE_TOL
+    ok = r["links"] and r["worst_enclosed"] >= 1.0 and r["new_mesh_collisions"] == 0 and r["steps"] and placed
     sys.exit(0 if ok else 1)
 
 

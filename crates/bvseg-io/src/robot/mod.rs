@@ -14,7 +14,7 @@ mod urdf;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use bvseg_core::Segmentation;
+use bvseg_core::{BoundingVolume, Segmentation};
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
 use crate::{IoError, LoadOptions, LoadedMesh};
@@ -108,6 +108,12 @@ pub struct Link {
     pub name: String,
     /// The meshes to segment, in file order.
     pub meshes: Vec<MeshRef>,
+    /// MJCF: the body's colliding primitive geoms (sphere, capsule, cylinder, box,
+    /// ellipsoid), in its frame, which the outputs keep beside the new volumes. (A URDF's
+    /// primitive collisions stay in its text.)
+    pub kept: Vec<BoundingVolume>,
+    /// MJCF: a root body's frame in the world (identity for every other link).
+    pub placement: DAffine3,
     /// URDF: byte ranges of the mesh `<collision>` elements to replace.
     pub(crate) replace: Vec<Range<usize>>,
     /// URDF: where new collisions go when there is nothing to replace (before `</link>`).
