@@ -18,19 +18,19 @@ use crate::IoError;
 /// The text with every `<include file=...>` replaced by the children of the included file's
 /// root, recursively; an included name is looked up, as MuJoCo does, in the main file's
 /// directory `main_dir`, then beside the including file. `chain` holds the files being
-/// expanded, to find cycles.
+/// expanded (canonical path, and as named), to find cycles.
 fn expand(
     path: &Path,
     main_dir: &Path,
     text: &str,
-    chain: &mut Vec<PathBuf>,
+    chain: &mut Vec<(PathBuf, String)>,
 ) -> Result<String, IoError> {
     let name = path.display().to_string();
     let doc = roxmltree::Document::parse(text).map_err(|e| IoError::Robot {
         name: name.clone(),
         message: e.to_string(),
     })?;
-    let dir = path.parent().unwrap_or(Path::new("."));
+    let dir = path.parent().unwrap_or(Path::new(""));
     let mut out = String::with_capacity(text.len());
     let mut pos = 0;
     for node in doc.descendants().filter(|n| n.has_tag_name("include")) {
@@ -47,17 +47,17 @@ fn expand(
             .find(|p| p.is_file())
             .unwrap_or_else(|| main_dir.join(file));
         let key = inc.canonicalize().unwrap_or_else(|_| inc.clone());
-        if chain.contains(&key) {
-            let mut names: Vec<String> = chain.iter().map(|p| p.display().to_string()).collect();
-            names.push(key.display().to_string());
+        let inc_name = inc.display().to_string();
+        if chain.iter().any(|(k, _)| *k == key) {
+            let mut names: Vec<&str> = chain.iter().map(|(_, n)| n.as_str()).collect();
+            names.push(&inc_name);
             return Err(IoError::IncludeCycle {
-                name,
+                name: chain[0].1.clone(),
                 chain: names.join(" -> "),
             });
         }
-        let inc_name = inc.display().to_string();
         let inc_text = read_text(&inc, &inc_name)?;
-        chain.push(key);
+        chain.push((key, inc_name.clone()));
         let inner = expand(&inc, main_dir, &inc_text, chain)?;
         chain.pop();
         let inner_doc = roxmltree::Document::parse(&inner).map_err(|e| IoError::Robot {
@@ -88,11 +88,9 @@ pub(crate) fn parse(
         message,
     };
     let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let text = expand(path, &dir, &text, &mut vec![key])?;
+    // Empty for a bare file name: paths joined to it stay as short as the user gave them.
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let text = expand(path, &dir, &text, &mut vec![(key, name.to_owned())])?;
     let doc = roxmltree::Document::parse(&text).map_err(|e| bad(e.to_string()))?;
     let root = doc.root_element();
     if root.tag_name().name() != "mujoco" {

@@ -216,6 +216,7 @@ fn check(robot: &Robot) -> Result<(), IoError> {
             let ext = crate::extension(&m.path);
             if !crate::MESH_EXTENSIONS.contains(&ext.as_deref().unwrap_or("")) {
                 return Err(IoError::Link {
+                    name: robot.file.clone(),
                     link: link.name.clone(),
                     source: Box::new(IoError::UnsupportedFormat {
                         name: m.path.display().to_string(),
@@ -254,6 +255,7 @@ impl Robot {
             return Ok(None);
         }
         let wrap = |e: IoError| IoError::Link {
+            name: self.file.clone(),
             link: link.name.clone(),
             source: Box::new(e),
         };

@@ -30,10 +30,8 @@ pub(crate) fn parse(
             root.tag_name().name()
         )));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    // Empty for a bare file name: paths joined to it stay as short as the user gave them.
+    let dir = path.parent().unwrap_or(Path::new(""));
     let want = match source {
         MeshSource::Collision => "collision",
         MeshSource::Visual => "visual",
