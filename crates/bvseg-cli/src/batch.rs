@@ -194,7 +194,8 @@ fn map<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync + Send) -> Vec
 
 /// The mesh and robot files directly in `dir`, sorted: meshes by extension, robots as
 /// `bvseg_io::robot::robot_format` tells them (every `.urdf`; an `.xml` whose root is
-/// `<mujoco>` and that bvseg did not write).
+/// `<mujoco>` and that bvseg did not write), less the files a robot uses (its meshes, the
+/// MJCF files it includes).
 fn list_inputs(dir: &Path) -> anyhow::Result<Vec<Input>> {
     let entries = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot read the directory", dir.display()))?;
@@ -220,6 +221,13 @@ fn list_inputs(dir: &Path) -> anyhow::Result<Vec<Input>> {
             });
         }
     }
+    // A robot's own meshes and included files are part of it, not inputs of their own.
+    let used: std::collections::BTreeSet<PathBuf> = files
+        .iter()
+        .filter(|i| i.robot)
+        .flat_map(|i| bvseg_io::robot::robot_uses(&i.path))
+        .collect();
+    files.retain(|i| i.path.canonicalize().map_or(true, |c| !used.contains(&c)));
     files.sort();
     if files.is_empty() {
         bail!(

@@ -18,12 +18,14 @@ use crate::IoError;
 /// The text with every `<include file=...>` replaced by the children of the included file's
 /// root, recursively; an included name is looked up, as MuJoCo does, in the main file's
 /// directory `main_dir`, then beside the including file. `chain` holds the files being
-/// expanded (canonical path, and as named), to find cycles.
+/// expanded (canonical path, and as named), to find cycles; `included` gets every file
+/// included.
 fn expand(
     path: &Path,
     main_dir: &Path,
     text: &str,
     chain: &mut Vec<(PathBuf, String)>,
+    included: &mut Vec<PathBuf>,
 ) -> Result<String, IoError> {
     let name = path.display().to_string();
     let doc = roxmltree::Document::parse(text).map_err(|e| IoError::Robot {
@@ -57,8 +59,9 @@ fn expand(
             });
         }
         let inc_text = read_text(&inc, &inc_name)?;
+        included.push(key.clone());
         chain.push((key, inc_name.clone()));
-        let inner = expand(&inc, main_dir, &inc_text, chain)?;
+        let inner = expand(&inc, main_dir, &inc_text, chain, included)?;
         chain.pop();
         let inner_doc = roxmltree::Document::parse(&inner).map_err(|e| IoError::Robot {
             name: inc_name.clone(),
@@ -77,6 +80,17 @@ fn expand(
     Ok(out)
 }
 
+/// The files an MJCF file includes, directly or not (canonical paths), as far as they can
+/// be read.
+pub(crate) fn included_files(path: &Path, text: &str) -> Vec<PathBuf> {
+    let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let mut included = Vec::new();
+    let name = path.display().to_string();
+    let _ = expand(path, &dir, text, &mut vec![(key, name)], &mut included);
+    included
+}
+
 pub(crate) fn parse(
     path: &Path,
     name: &str,
@@ -90,7 +104,13 @@ pub(crate) fn parse(
     let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     // Empty for a bare file name: paths joined to it stay as short as the user gave them.
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    let text = expand(path, &dir, &text, &mut vec![(key, name.to_owned())])?;
+    let text = expand(
+        path,
+        &dir,
+        &text,
+        &mut vec![(key, name.to_owned())],
+        &mut Vec::new(),
+    )?;
     let doc = roxmltree::Document::parse(&text).map_err(|e| bad(e.to_string()))?;
     let root = doc.root_element();
     if root.tag_name().name() != "mujoco" {

@@ -188,6 +188,33 @@ pub fn read_robot(path: impl AsRef<Path>, source: MeshSource) -> Result<Robot, I
     Ok(robot)
 }
 
+/// The files a robot file uses besides itself, as canonical paths: its links' mesh files
+/// (collision and visual, those that exist) and the files an MJCF includes. Best effort: what
+/// cannot be read is left out. A batch does not take these as inputs of their own: they are
+/// the robot's.
+pub fn robot_uses(path: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for source in [MeshSource::Collision, MeshSource::Visual] {
+        if let Ok(robot) = read_robot(path, source) {
+            out.extend(
+                robot
+                    .links
+                    .iter()
+                    .flat_map(|l| &l.meshes)
+                    .filter_map(|m| m.path.canonicalize().ok()),
+            );
+        }
+    }
+    if robot_format(path) == Some(RobotFormat::Mjcf) {
+        if let Ok(text) = read_text(path, &path.display().to_string()) {
+            out.extend(mjcf::included_files(path, &text));
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
 pub(crate) fn read_text(path: &Path, name: &str) -> Result<String, IoError> {
     let bytes = std::fs::read(path).map_err(|e| IoError::io(name, "read", e))?;
     if bytes.len() as u64 > crate::MAX_INPUT_BYTES {

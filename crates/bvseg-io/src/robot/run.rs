@@ -153,12 +153,9 @@ impl RobotRun {
     /// [`DONE_FILE`] last.
     pub fn files(&self) -> Vec<(PathBuf, Vec<u8>)> {
         let mut files = Vec::new();
-        for (link, seg) in self.robot.links.iter().zip(&self.parts) {
-            if let Some(seg) = seg {
-                files.push((
-                    Path::new("links").join(format!("{}.json", file_safe(&link.name))),
-                    crate::to_json_string(seg).into_bytes(),
-                ));
+        for (i, seg) in self.parts.iter().enumerate() {
+            if let (Some(seg), Some(rel)) = (seg, self.volumes_file(i)) {
+                files.push((rel, crate::to_json_string(seg).into_bytes()));
             }
         }
         files.push((
@@ -174,6 +171,15 @@ impl RobotRun {
             to_curobo(&self.robot, &self.spheres).into_bytes(),
         ));
         files
+    }
+
+    /// The volumes document of link `link` (by index), relative to the output directory:
+    /// `links/<link>.json` with the name made safe for a file; `None` for a link that was
+    /// not segmented.
+    pub fn volumes_file(&self, link: usize) -> Option<PathBuf> {
+        let l = self.robot.links.get(link)?;
+        self.parts.get(link)?.as_ref()?;
+        Some(Path::new("links").join(format!("{}.json", file_safe(&l.name))))
     }
 
     /// Writes every output of [`RobotRun::files`] under `dir` (created if missing), each
