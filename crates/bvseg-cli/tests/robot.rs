@@ -282,7 +282,9 @@ fn batch_runs_robots_one_directory_each() {
         urdf("meshes/nothere.obj", "arm", "arm"),
     )
     .unwrap();
-    fs::write(dir.join("one.xml"), mjcf("meshes/arm.obj", "")).unwrap();
+    // one.xml's mesh sits beside it: part of the robot, not an input of its own.
+    fs::copy(dir.join("meshes/arm.obj"), dir.join("part.obj")).unwrap();
+    fs::write(dir.join("one.xml"), mjcf("part.obj", "")).unwrap();
     // Not robots: an XML of something else, and an MJCF bvseg wrote.
     fs::write(dir.join("notes.xml"), "<notes/>").unwrap();
     fs::write(
