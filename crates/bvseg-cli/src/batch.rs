@@ -320,9 +320,9 @@ fn process_robot(
     let run = run_robot(path, options, None, args.params.timeout, true)?;
     run.write(dir)?;
     let met = &run.tolerances_met;
-    let tolerances_met = if met.iter().any(|m| *m == Some(false)) {
+    let tolerances_met = if met.contains(&Some(false)) {
         "false"
-    } else if met.iter().any(|m| *m == Some(true)) {
+    } else if met.contains(&Some(true)) {
         "true"
     } else {
         ""

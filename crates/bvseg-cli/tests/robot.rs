@@ -184,6 +184,12 @@ fn bad_robots_are_one_line_errors_and_write_nothing() {
             vec!["\"base\"", "broken.obj"],
         ),
         (
+            "mesh without volume",
+            "two.urdf",
+            urdf("meshes/flat.obj", "arm", "arm"),
+            vec!["two.urdf", "link \"base\"", "enclose no volume"],
+        ),
+        (
             "include cycle",
             "one.xml",
             mjcf("meshes/base.obj", "inc.xml"),
@@ -201,6 +207,11 @@ fn bad_robots_are_one_line_errors_and_write_nothing() {
         setup(&dir);
         fs::write(dir.join("meshes/base.dae"), "<COLLADA/>").unwrap();
         fs::write(dir.join("meshes/broken.obj"), "v 0 0 0\nf 1 2 3\n").unwrap();
+        fs::write(
+            dir.join("meshes/flat.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n",
+        )
+        .unwrap();
         // inc.xml includes one.xml, which includes inc.xml.
         fs::write(
             dir.join("inc.xml"),

@@ -754,6 +754,7 @@ pub fn to_mjcf_robot(robot: &Robot, results: LinkResults) -> String {
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+    use std::f64::consts::FRAC_1_SQRT_2;
 
     /// The body quaternions MuJoCo 4.0.0 compiles (`MjModel.body_quat`, w x y z) for
     /// `euler="10 20 30"` in degrees under each `eulerseq`, and for the other orientations.
@@ -800,7 +801,7 @@ mod tests {
         let others = [
             (
                 r#"xyaxes="0 1 0 -1 0 0""#,
-                [0.707_106_781_186_547_6, 0.0, 0.0, 0.707_106_781_186_547_5],
+                [FRAC_1_SQRT_2, 0.0, 0.0, FRAC_1_SQRT_2],
             ),
             (
                 r#"zaxis="0 1 1""#,
