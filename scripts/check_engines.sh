@@ -6,6 +6,10 @@
 # - MJCF: MuJoCo's Python package loads it (MjModel.from_xml_path), steps it, and its geoms
 #   (type, size, position, axes; mesh vertices in world coordinates) must match the JSON.
 # The checks of both are in scripts/check_engines.py.
+# - Robots: `bvseg robot` on the bundled MJCF arm (assets/robots/arm) and, when the project's
+#   shared folder is there (../shared, or $BVSEG_SHARED), on the Panda URDF; MuJoCo loads the
+#   original and the new URDF and MJCF, and every original collision mesh vertex must lie in
+#   the new geoms of its body (scripts/check_robot.py).
 #
 #   scripts/check_engines.sh BVSEG_BINARY [OUTDIR]
 #
@@ -96,5 +100,40 @@ if [ ${#bases[@]} -gt 0 ]; then
     node "$root/scripts/validate_glb.mjs" "$validator" "$out/validator.json" "${glbs[@]}"
     "$py" "$root/scripts/check_engines.py" "$out/validator.json" "${bases[@]}" || failed=1
 fi
-echo "$(( ${#bases[@]} * 2 )) files checked in $(( SECONDS - start )) s: $([ $failed = 0 ] && echo all OK || echo FAILURES)"
+checked=$(( ${#bases[@]} * 2 ))
+
+# --- robots -------------------------------------------------------------------------------
+# robot NAME ORIGINAL STEM [bvseg robot options]: segments ORIGINAL into $out/robot_NAME and
+# checks the new STEM.xml and STEM.urdf against it.
+robot() {
+    local name=$1 original=$2 stem=$3
+    shift 3
+    local dir="$out/robot_$name"
+    rm -rf "$dir"
+    local code=0
+    "$bvseg" robot "$original" -o "$dir" -q "$@" >"$dir.log" 2>&1 || code=$?
+    if [ $code != 0 ]; then
+        echo "FAIL robot $name: bvseg robot $* exited $code: $(tail -n 3 "$dir.log" | tr '\n' ' ')"
+        failed=1
+        return
+    fi
+    for new in "$dir/$stem.xml" "$dir/$stem.urdf"; do
+        if report=$("$py" "$root/scripts/check_robot.py" "$original" "$new" 2>&1); then
+            echo "OK robot $name $(basename "$new"): $(tail -n 1 <<<"$report")"
+        else
+            echo "FAIL robot $name $(basename "$new"):"
+            sed 's/^/  /' <<<"$report"
+            failed=1
+        fi
+        checked=$((checked + 1))
+    done
+}
+robot arm "$root/assets/robots/arm/arm.xml" bvseg_arm --max-parts 6 --samples 4000
+shared="${BVSEG_SHARED:-$root/../shared}"
+if [ -f "$shared/robots/panda/panda.urdf" ]; then
+    robot panda "$shared/robots/panda/panda.urdf" panda
+else
+    echo "skipped robot panda: no $shared/robots/panda/panda.urdf (the project's shared folder)"
+fi
+echo "$checked files checked in $(( SECONDS - start )) s: $([ $failed = 0 ] && echo all OK || echo FAILURES)"
 exit $failed

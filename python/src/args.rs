@@ -45,7 +45,7 @@ pub struct RunArgs {
 
 /// A non-negative integer argument: `TypeError` for a non-integer (bools included),
 /// `ValueError` naming the parameter for a negative one.
-fn uint(name: &str, v: &Bound<'_, PyAny>) -> PyResult<u64> {
+pub fn uint(name: &str, v: &Bound<'_, PyAny>) -> PyResult<u64> {
     if v.is_instance_of::<PyBool>() {
         return Err(PyTypeError::new_err(format!(
             "{name} must be an integer, got a bool"
@@ -75,7 +75,7 @@ fn type_name(v: &Bound<'_, PyAny>) -> String {
         .unwrap_or_else(|_| "an object".into())
 }
 
-fn size(name: &str, v: &Bound<'_, PyAny>) -> PyResult<usize> {
+pub fn size(name: &str, v: &Bound<'_, PyAny>) -> PyResult<usize> {
     // Above usize::MAX (32-bit platforms) the core's range check says so.
     Ok(usize::try_from(uint(name, v)?).unwrap_or(usize::MAX))
 }
@@ -343,8 +343,13 @@ impl<'py> Given<'py> {
 }
 
 fn unknown(function: &str, key: &str) -> PyErr {
+    let own = if function == "robot" {
+        "source, max_parts, total_parts, spheres_per_link, urdf_capsules, progress, "
+    } else {
+        ""
+    };
     PyTypeError::new_err(format!(
-        "{function}() got an unexpected keyword argument '{key}' (it takes {})",
+        "{function}() got an unexpected keyword argument '{key}' (it takes {own}{})",
         NAMES.join(", ")
     ))
 }

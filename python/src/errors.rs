@@ -13,6 +13,16 @@ pyo3::create_exception!(
      ValueError; the message is one line naming the mesh."
 );
 
+pyo3::create_exception!(
+    bvseg,
+    RobotError,
+    PyValueError,
+    "A robot file that cannot be used: not well-formed XML, not a URDF or MJCF robot, a link \
+     name used twice, a joint whose parent or child is not a link, an MJCF include cycle, an \
+     unknown default class. A subclass of ValueError; the message is one line naming the \
+     file. (A missing mesh file is a FileNotFoundError, an unreadable one a MeshError.)"
+);
+
 /// An `IoError` of reading a mesh: the operating system's errors as `OSError` (with its
 /// `errno`, so that a missing file is a `FileNotFoundError`), everything else a `MeshError`.
 pub fn mesh_io(e: IoError) -> PyErr {
@@ -28,6 +38,23 @@ pub fn output_io(e: IoError) -> PyErr {
     match &e {
         IoError::Io { .. } => os_error(&e),
         _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+/// An `IoError` of reading a robot: the operating system's errors as `OSError`, a mesh file
+/// that is not there as `FileNotFoundError`, a link's mesh that cannot be used as
+/// `MeshError`, everything else a `RobotError`.
+pub fn robot_io(e: IoError) -> PyErr {
+    match &e {
+        IoError::Io { .. } => os_error(&e),
+        IoError::MissingMesh { .. } => {
+            pyo3::exceptions::PyFileNotFoundError::new_err(e.to_string())
+        }
+        IoError::Link { source, .. } if matches!(**source, IoError::Io { .. }) => {
+            PyOSError::new_err(e.to_string())
+        }
+        IoError::Link { .. } => MeshError::new_err(e.to_string()),
+        _ => RobotError::new_err(e.to_string()),
     }
 }
 

@@ -5,12 +5,14 @@
 //! `bvseg_io::load` / `bvseg_io::load_arrays`, the run through the core's `Segmenter` (in a
 //! local rayon pool when `threads` is given, with a `Cancel` flag for the timeout and the
 //! progress callback), the outputs through `bvseg_io::to_json_string` and
-//! `bvseg_io::export::write_output`, the check through `bvseg-verify`. The GIL is released
-//! while a mesh is loaded, segmented or verified.
+//! `bvseg_io::export::write_output`, the check through `bvseg-verify`, robots through
+//! `bvseg_io::robot::segment_robot`. The GIL is released while a mesh is loaded, segmented or
+//! verified, and while a robot runs.
 
 mod args;
 mod errors;
 mod mesh;
+mod robot;
 mod run;
 mod verify;
 
@@ -21,6 +23,12 @@ use pyo3::prelude::*;
 fn _bvseg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("MeshError", py.get_type::<errors::MeshError>())?;
+    m.add("RobotError", py.get_type::<errors::RobotError>())?;
+    m.add("ROBOT_DONE_FILE", bvseg_io::robot::DONE_FILE)?;
+    m.add(
+        "DEFAULT_SPHERES_PER_LINK",
+        bvseg_io::robot::DEFAULT_SPHERES_PER_LINK,
+    )?;
     m.add("GENERATOR", bvseg_io::GENERATOR)?;
     m.add("MESH_EXTENSIONS", bvseg_io::MESH_EXTENSIONS.to_vec())?;
     m.add("MAX_VOLUMES_BYTES", bvseg_io::MAX_VOLUMES_BYTES)?;
@@ -33,6 +41,9 @@ fn _bvseg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(args::check_params, m)?)?;
     m.add_function(wrap_pyfunction!(run::segment, m)?)?;
     m.add_function(wrap_pyfunction!(verify::verify, m)?)?;
+    m.add_function(wrap_pyfunction!(robot::robot, m)?)?;
+    m.add_function(wrap_pyfunction!(robot::robot_format, m)?)?;
+    m.add_function(wrap_pyfunction!(robot::robot_uses, m)?)?;
     m.add_function(wrap_pyfunction!(verify::verify_defaults, m)?)?;
     Ok(())
 }

@@ -29,7 +29,7 @@ pub struct PySegmentation {
 }
 
 /// One refinement step as the JSON file's `history` writes it.
-fn step_dict<'py>(py: Python<'py>, s: &Step) -> PyResult<Bound<'py, PyDict>> {
+pub fn step_dict<'py>(py: Python<'py>, s: &Step) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("step", s.kind.as_str())?;
     d.set_item("k", s.k)?;
@@ -42,13 +42,13 @@ fn step_dict<'py>(py: Python<'py>, s: &Step) -> PyResult<Bound<'py, PyDict>> {
 
 /// Sets a [`Cancel`] flag when its time is up, unless dropped first (the command line's
 /// timer, less ending the process: the caller's interpreter is not ours to end).
-struct Timer {
+pub struct Timer {
     _disarm: mpsc::Sender<()>,
-    fired: Arc<AtomicBool>,
+    pub fired: Arc<AtomicBool>,
 }
 
 impl Timer {
-    fn start(seconds: f64, cancel: Cancel) -> Self {
+    pub fn start(seconds: f64, cancel: Cancel) -> Self {
         let (tx, rx) = mpsc::channel::<()>();
         let fired = Arc::new(AtomicBool::new(false));
         let flag = fired.clone();
@@ -65,7 +65,7 @@ impl Timer {
 
 /// A pool of `threads` when given (as the command line's `in_pool`); `None`: rayon's global
 /// pool.
-fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+pub fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
     threads
         .map(|n| {
             rayon::ThreadPoolBuilder::new()
@@ -77,7 +77,7 @@ fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
 }
 
 /// Runs `work` in `pool`, or in the global pool.
-fn within<T: Send>(pool: Option<&rayon::ThreadPool>, work: impl FnOnce() -> T + Send) -> T {
+pub fn within<T: Send>(pool: Option<&rayon::ThreadPool>, work: impl FnOnce() -> T + Send) -> T {
     match pool {
         Some(p) => p.install(work),
         None => work(),

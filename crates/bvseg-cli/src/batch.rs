@@ -1,7 +1,8 @@
-//! `bvseg batch DIR -o OUTDIR`: every mesh in a directory, in parallel across files.
+//! `bvseg batch DIR -o OUTDIR`: every mesh and robot in a directory, in parallel across files.
 //!
 //! Outputs are written atomically, so an output that exists is complete: a file whose
-//! outputs all exist is skipped, which makes an interrupted batch resumable. The summary
+//! outputs all exist is skipped, which makes an interrupted batch resumable (a robot, whose
+//! outputs fill a directory, is done when the file its run writes last exists). The summary
 //! (`OUTDIR/summary.csv`, sorted by file name) holds no timings, so equal runs give equal
 //! files.
 use std::collections::HashMap;
@@ -12,15 +13,19 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use bvseg_io::export::{write_output, ExportOptions, OutputFormat};
+use bvseg_io::robot::RobotOptions;
 use clap::Args;
 
 use crate::common::{self, InputArgs, ParamArgs};
 use crate::progress::{batch_bar, Progress};
+use crate::robot::{run_robot, RobotBudgetArgs};
 use crate::EXIT_TOLERANCE;
 
 #[derive(Args, Debug)]
 pub struct BatchArgs {
-    /// Directory of meshes (.obj, .gltf, .glb, .stl; not searched recursively).
+    /// Directory of meshes (.obj, .gltf, .glb, .stl) and robots (.urdf, MJCF .xml), not
+    /// searched recursively. Each robot's outputs go to OUTDIR/<name>/, as `bvseg robot`
+    /// writes them.
     #[arg(value_name = "DIR")]
     pub dir: PathBuf,
 
@@ -47,9 +52,19 @@ pub struct BatchArgs {
     #[command(flatten)]
     pub params: ParamArgs,
 
+    #[command(flatten)]
+    pub robot: RobotBudgetArgs,
+
     /// Print nothing on stderr but errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// One input of a batch.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+struct Input {
+    path: PathBuf,
+    robot: bool,
 }
 
 /// The outcome of one file, one CSV row.
@@ -77,25 +92,43 @@ pub fn run(args: &BatchArgs) -> anyhow::Result<ExitCode> {
         }
     }
     let params = args.params.params(&formats)?;
-    let files = list_meshes(&args.dir)?;
+    // A robot's links always get a JSON document, the format that carries the hierarchy.
+    let robot_options = args
+        .robot
+        .options(args.params.params(&[OutputFormat::Json])?);
+    let inputs = list_inputs(&args.dir)?;
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("{}: cannot create the directory", args.output.display()))?;
+    let files: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     let bases = output_bases(&files);
 
     let start = Instant::now();
     let bar = batch_bar(files.len(), args.quiet);
     let done = AtomicUsize::new(0);
-    let one = |(path, base): (&PathBuf, &String)| -> Row {
-        let outs: Vec<PathBuf> = exts
-            .iter()
-            .map(|e| args.output.join(format!("{base}.{e}")))
-            .collect();
-        let row = if !args.force && outs.iter().all(|o| o.is_file()) {
-            skipped(path, &args.output.join(format!("{base}.json")))
+    let one = |(input, base): (&Input, &String)| -> Row {
+        let path = &input.path;
+        let row = if input.robot {
+            let dir = args.output.join(base);
+            if !args.force && dir.join(bvseg_io::robot::DONE_FILE).is_file() {
+                skipped(path, None)
+            } else {
+                match process_robot(path, &dir, base, &robot_options, args) {
+                    Ok(row) => row,
+                    Err(e) => failed(path, &common::one_line(&e)),
+                }
+            }
         } else {
-            match process(path, &outs, args, &params) {
-                Ok(row) => row,
-                Err(e) => failed(path, &common::one_line(&e)),
+            let outs: Vec<PathBuf> = exts
+                .iter()
+                .map(|e| args.output.join(format!("{base}.{e}")))
+                .collect();
+            if !args.force && outs.iter().all(|o| o.is_file()) {
+                skipped(path, Some(&args.output.join(format!("{base}.json"))))
+            } else {
+                match process(path, &outs, args, &params) {
+                    Ok(row) => row,
+                    Err(e) => failed(path, &common::one_line(&e)),
+                }
             }
         };
         bar.inc(1);
@@ -115,7 +148,7 @@ pub fn run(args: &BatchArgs) -> anyhow::Result<ExitCode> {
         }
         row
     };
-    let work: Vec<(&PathBuf, &String)> = files.iter().zip(&bases).collect();
+    let work: Vec<(&Input, &String)> = inputs.iter().zip(&bases).collect();
     let mut rows = common::in_pool(args.params.threads, || Ok(map(work, one)))?;
     bar.finish_and_clear();
     rows.sort_by(|a, b| a.file.cmp(&b.file));
@@ -159,8 +192,11 @@ fn map<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync + Send) -> Vec
     items.into_iter().map(f).collect()
 }
 
-/// The mesh files directly in `dir`, sorted.
-fn list_meshes(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+/// The mesh and robot files directly in `dir`, sorted: meshes by extension, robots as
+/// `bvseg_io::robot::robot_format` tells them (every `.urdf`; an `.xml` whose root is
+/// `<mujoco>` and that bvseg did not write), less the files a robot uses (its meshes, the
+/// MJCF files it includes).
+fn list_inputs(dir: &Path) -> anyhow::Result<Vec<Input>> {
     let entries = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot read the directory", dir.display()))?;
     let mut files = Vec::new();
@@ -168,16 +204,34 @@ fn list_meshes(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
         let p = e
             .with_context(|| format!("{}: cannot read the directory", dir.display()))?
             .path();
-        let known = bvseg_io::extension(&p)
+        if !p.is_file() {
+            continue;
+        }
+        let mesh = bvseg_io::extension(&p)
             .is_some_and(|e| bvseg_io::MESH_EXTENSIONS.contains(&e.as_str()));
-        if known && p.is_file() {
-            files.push(p);
+        if mesh {
+            files.push(Input {
+                path: p,
+                robot: false,
+            });
+        } else if bvseg_io::robot::robot_format(&p).is_some() {
+            files.push(Input {
+                path: p,
+                robot: true,
+            });
         }
     }
+    // A robot's own meshes and included files are part of it, not inputs of their own.
+    let used: std::collections::BTreeSet<PathBuf> = files
+        .iter()
+        .filter(|i| i.robot)
+        .flat_map(|i| bvseg_io::robot::robot_uses(&i.path))
+        .collect();
+    files.retain(|i| i.path.canonicalize().map_or(true, |c| !used.contains(&c)));
     files.sort();
     if files.is_empty() {
         bail!(
-            "{}: no mesh files ({}) in the directory",
+            "{}: no mesh files ({}) nor robots (.urdf, MJCF .xml) in the directory",
             dir.display(),
             bvseg_io::MESH_EXTENSIONS.join(", ")
         );
@@ -253,6 +307,42 @@ fn process(
     })
 }
 
+/// One robot into `dir` (`OUTDIR/<base>`): its row has the links' triangles, their parts,
+/// and whether every link met its tolerances.
+fn process_robot(
+    path: &Path,
+    dir: &Path,
+    base: &str,
+    options: &RobotOptions,
+    args: &BatchArgs,
+) -> anyhow::Result<Row> {
+    // Several files run at once: no per-link lines, and the batch's pool for threads.
+    let run = run_robot(path, options, None, args.params.timeout, true)?;
+    run.write(dir)?;
+    let met = &run.tolerances_met;
+    let tolerances_met = if met.contains(&Some(false)) {
+        "false"
+    } else if met.contains(&Some(true)) {
+        "true"
+    } else {
+        ""
+    };
+    Ok(Row {
+        file: file_name(path),
+        status: "done",
+        triangles: run.triangles.iter().sum::<usize>().to_string(),
+        k: run.total_parts().to_string(),
+        tov: String::new(),
+        mov: String::new(),
+        tolerances_met: tolerances_met.to_owned(),
+        message: format!(
+            "robot: {} links segmented, {} spheres, outputs in {base}/",
+            run.links_segmented(),
+            run.total_spheres()
+        ),
+    })
+}
+
 fn file_name(path: &Path) -> String {
     path.file_name()
         .unwrap_or_default()
@@ -274,11 +364,11 @@ fn failed(path: &Path, message: &str) -> Row {
 }
 
 /// A skipped file's row, with the figures of its existing JSON output when there is one.
-fn skipped(path: &Path, json: &Path) -> Row {
+fn skipped(path: &Path, json: Option<&Path>) -> Row {
     let mut row = failed(path, "outputs exist");
     row.status = "skipped";
-    let doc: Option<serde_json::Value> = std::fs::read_to_string(json)
-        .ok()
+    let doc: Option<serde_json::Value> = json
+        .and_then(|j| std::fs::read_to_string(j).ok())
         .and_then(|t| serde_json::from_str(&t).ok());
     if let Some(m) = doc.as_ref().map(|d| &d["metrics"]) {
         let field = |k: &str| m.get(k).map(|v| v.to_string()).unwrap_or_default();

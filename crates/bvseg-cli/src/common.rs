@@ -333,7 +333,7 @@ pub fn run_segmentation(
 /// between bounded pieces of work; should one of them still be running a few seconds later,
 /// the timer ends the process itself (exit code 2, nothing written: outputs are written
 /// after the run, and the timer is dropped before).
-struct Timer {
+pub struct Timer {
     _disarm: std::sync::mpsc::Sender<()>,
 }
 
@@ -341,7 +341,9 @@ struct Timer {
 const TIMEOUT_GRACE: std::time::Duration = std::time::Duration::from_secs(3);
 
 impl Timer {
-    fn start(seconds: f64, name: &str, cancel: Cancel, exit_when_stuck: bool) -> Self {
+    /// Sets `cancel` after `seconds`; with `exit_when_stuck`, also ends the process (exit code
+    /// 2, a line naming `name`) when the run has not stopped a few seconds later.
+    pub fn start(seconds: f64, name: &str, cancel: Cancel, exit_when_stuck: bool) -> Self {
         let (tx, rx) = std::sync::mpsc::channel::<()>();
         let name = name.to_owned();
         let limit = std::time::Duration::from_secs_f64(seconds);

@@ -102,7 +102,7 @@ pub enum IoError {
     /// An MJCF `<include>` that includes itself, directly or not.
     #[error("{name}: include cycle: {chain}")]
     IncludeCycle {
-        /// The file that includes one of its includers.
+        /// The robot file, where the chain starts.
         name: String,
         /// The files of the cycle, joined by ` -> `.
         chain: String,
@@ -120,8 +120,10 @@ pub enum IoError {
         tried: String,
     },
     /// A link's mesh could not be loaded; the source names the file.
-    #[error("link {link:?}: {source}")]
+    #[error("{name}: link {link:?}: {source}")]
     Link {
+        /// The robot file.
+        name: String,
         /// The link.
         link: String,
         /// Why its mesh could not be loaded.

@@ -11,10 +11,11 @@ The Python face of the Rust library: the same loader, algorithm, writers and che
 >>> bvseg.verify("assets/meshes/bunny.obj", result)["enclosed"]  # doctest: +SKIP
 True
 
-Functions: :func:`segment`, :func:`verify`, :func:`load_mesh`. Errors: a bad parameter is a
-``ValueError`` naming it and its range (``TypeError`` for a value of the wrong type); a bad
-mesh a :class:`MeshError` (a ``ValueError``); a missing file a ``FileNotFoundError``; a run
-past its ``timeout`` a ``TimeoutError``. Warnings about a mesh (welded vertices, holes, ...)
+Functions: :func:`segment`, :func:`verify`, :func:`load_mesh`, :func:`robot`. Errors: a bad
+parameter is a ``ValueError`` naming it and its range (``TypeError`` for a value of the wrong
+type); a bad mesh a :class:`MeshError` (a ``ValueError``); a bad robot file a
+:class:`RobotError` (a ``ValueError``); a missing file a ``FileNotFoundError``; a run past its
+``timeout`` a ``TimeoutError``. Warnings about a mesh (welded vertices, holes, ...)
 are issued as :class:`BvsegWarning`. The manual: python/README.md in the repository.
 """
 
@@ -29,7 +30,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence, Union
 import numpy as np
 
 from . import _bvseg
-from ._bvseg import GENERATOR, MESH_EXTENSIONS, Mesh, MeshError
+from ._bvseg import GENERATOR, MESH_EXTENSIONS, Mesh, MeshError, RobotError
 
 __version__ = "0.1.0"
 
@@ -40,10 +41,13 @@ __all__ = [
     "MESH_EXTENSIONS",
     "Mesh",
     "MeshError",
+    "Robot",
+    "RobotError",
     "Segmentation",
     "TARGETS",
     "VERIFY_DEFAULTS",
     "load_mesh",
+    "robot",
     "segment",
     "verify",
 ]
@@ -410,3 +414,107 @@ def verify(
 
 
 verify.__doc__ = (verify.__doc__ or "").replace("{points}", f"{VERIFY_DEFAULTS['points']:,}")
+
+
+class Robot:
+    """The result of :func:`robot`: what was written and what each link got.
+
+    Attributes: ``name`` (the outputs' file stem), ``robot`` (the model's name in the file),
+    ``format`` (``"urdf"`` or ``"mjcf"``), ``out_dir``, ``urdf``, ``mjcf`` and ``curobo`` (the
+    paths of ``<name>.urdf``, ``<name>.xml`` and ``curobo.yml``), ``files`` (every path
+    written, ``curobo.yml`` last), ``parts`` and ``spheres`` (over all links), ``seconds``, and
+    ``links``: one dict per link of the file, in file order, with ``name``, ``meshes`` (mesh
+    geoms or collisions segmented), ``triangles``, ``parts``, ``shapes`` (each part's kind),
+    ``kept`` (the MJCF's own primitive colliders kept beside them), ``spheres`` (in
+    curobo.yml), ``tolerances_met`` and ``volumes`` (the path of its ``bvseg.volumes``
+    document, None for a link without meshes).
+    """
+
+    __slots__ = ("_d",)
+
+    def __init__(self, d: dict[str, Any]) -> None:
+        self._d = d
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._d[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def link(self, name: str) -> dict[str, Any]:
+        """The dict of the link called ``name`` (``KeyError`` if there is none)."""
+        for link in self._d["links"]:
+            if link["name"] == name:
+                return link
+        raise KeyError(name)
+
+    def volumes(self, link: str) -> list[dict[str, Any]]:
+        """The volumes of link ``link``, as its ``bvseg.volumes`` document lists them (in the
+        link's frame); ``[]`` for a link without meshes."""
+        path = self.link(link)["volumes"]
+        if path is None:
+            return []
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)["volumes"]
+
+    def __repr__(self) -> str:
+        segmented = sum(1 for link in self._d["links"] if link["volumes"] is not None)
+        return (
+            f"<bvseg.Robot {self._d['name']!r}: {segmented} links segmented, {self._d['parts']} parts, "
+            f"{self._d['spheres']} spheres in {self._d['out_dir']!r}>"
+        )
+
+
+def robot(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    source: str = "collision",
+    max_parts: int | None = None,
+    total_parts: int | None = None,
+    spheres_per_link: int | None = None,
+    urdf_capsules: bool = False,
+    progress: Callable[[dict[str, Any]], object] | None = None,
+    **params: Any,
+) -> Robot:
+    # The docstring is below, filled in with the defaults.
+    return Robot(
+        _bvseg.robot(
+            os.fspath(path),
+            os.fspath(out_dir),
+            source=source,
+            max_parts=max_parts,
+            total_parts=total_parts,
+            spheres_per_link=spheres_per_link,
+            urdf_capsules=urdf_capsules,
+            progress=progress,
+            **params,
+        )
+    )
+
+
+robot.__doc__ = f"""Segment every link of a robot and write it with primitive colliders, as
+``bvseg robot PATH -o OUT_DIR`` does (the same run, the same files).
+
+``path``: a URDF (``.urdf``) or MJCF (``.xml``) file. Each link's collision meshes
+(``source="visual"``: its visual ones) are segmented in the link's frame, and ``out_dir``
+(created if missing) gets ``<name>.urdf`` (the mesh collisions replaced by boxes, spheres,
+cylinders; capsules with ``urdf_capsules``), ``<name>.xml`` (MJCF), ``curobo.yml`` (cuRobo's
+``collision_spheres`` and ``self_collision_ignore``) and ``links/<link>.json``.
+
+Budgets: ``max_parts`` per link, or ``total_parts`` for the whole robot shared among the
+links by volume (each at least one); ``spheres_per_link`` (default
+{_bvseg.DEFAULT_SPHERES_PER_LINK}) spheres per link in curobo.yml. The other keyword arguments
+are :func:`segment`'s (``samples``, ``tov``, ``max_protrusion``, ``kinds``, ``target``,
+``k``, ``threads``, ``timeout`` for the whole robot, ...), applied to each link; the kinds
+are narrowed to those URDF has (box, sphere, cylinder, and capsule with ``urdf_capsules``).
+``progress`` is called with a dict per refinement step: :func:`segment`'s keys, and ``link``
+and ``spheres`` (whether it is the run for curobo.yml).
+
+Returns a :class:`Robot`. Raises :class:`RobotError` for a robot file that cannot be used
+(not XML, not a robot, a link name used twice, a joint whose parent or child is not a link,
+an include cycle), ``FileNotFoundError`` for a robot or mesh file that is not there,
+:class:`MeshError` for a link's mesh that cannot be read or encloses no volume (the message
+names the link and the file), ``ValueError``/``TypeError`` for bad arguments,
+``TimeoutError`` past ``timeout``. Nothing is written unless every link was segmented.
+"""

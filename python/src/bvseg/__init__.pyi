@@ -10,6 +10,7 @@ from ._bvseg import GENERATOR as GENERATOR
 from ._bvseg import MESH_EXTENSIONS as MESH_EXTENSIONS
 from ._bvseg import Mesh as Mesh
 from ._bvseg import MeshError as MeshError
+from ._bvseg import RobotError as RobotError
 
 __version__: str
 DEFAULTS: Mapping[str, Any]
@@ -96,3 +97,33 @@ def verify(
     seed: int | None = ...,
     threads: int | None = ...,
 ) -> dict[str, Any]: ...
+
+class Robot:
+    name: str
+    robot: str
+    format: str
+    out_dir: str
+    urdf: str
+    mjcf: str
+    curobo: str
+    files: list[str]
+    links: list[dict[str, Any]]
+    parts: int
+    spheres: int
+    seconds: float
+    def __init__(self, d: dict[str, Any]) -> None: ...
+    def link(self, name: str) -> dict[str, Any]: ...
+    def volumes(self, link: str) -> list[dict[str, Any]]: ...
+
+def robot(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    source: str = ...,
+    max_parts: int | None = ...,
+    total_parts: int | None = ...,
+    spheres_per_link: int | None = ...,
+    urdf_capsules: bool = ...,
+    progress: Callable[[dict[str, Any]], object] | None = ...,
+    **params: Any,
+) -> Robot: ...

@@ -11,6 +11,10 @@ MESH_EXTENSIONS: list[str]
 MAX_VOLUMES_BYTES: int
 
 class MeshError(ValueError): ...
+class RobotError(ValueError): ...
+
+ROBOT_DONE_FILE: str
+DEFAULT_SPHERES_PER_LINK: int
 
 class Mesh:
     """A mesh as bvseg sees it: welded, without degenerate triangles, facing outward."""
@@ -81,3 +85,17 @@ def verify(
     threads: int | None = None,
 ) -> str: ...
 def verify_defaults() -> dict[str, Any]: ...
+def robot(
+    path: str,
+    out_dir: str,
+    *,
+    source: str = "collision",
+    max_parts: int | None = None,
+    total_parts: int | None = None,
+    spheres_per_link: int | None = None,
+    urdf_capsules: bool = False,
+    progress: Callable[[dict[str, Any]], object] | None = None,
+    **params: Any,
+) -> dict[str, Any]: ...
+def robot_format(path: str) -> str | None: ...
+def robot_uses(path: str) -> list[str]: ...

@@ -59,6 +59,22 @@ def _segment_local(path: str, outputs: list[str], params: dict[str, Any]) -> dic
     }
 
 
+def _robot_local(task: dict[str, Any]) -> dict[str, Any]:
+    """One robot (``task["robot"]``: its output directory, parameters and options)."""
+    import bvseg
+
+    spec = task["robot"]
+    r = bvseg.robot(task["source"], spec["out_dir"], **spec["options"], **spec["params"])
+    met = [link["tolerances_met"] for link in r.links if link["tolerances_met"] is not None]
+    segmented = sum(1 for link in r.links if link["volumes"] is not None)
+    return {
+        "triangles": sum(link["triangles"] for link in r.links),
+        "k": r.parts,
+        "tolerances_met": all(met) if met else None,
+        "message": f"robot: {segmented} links segmented, {r.spheres} spheres, outputs in {spec['base']}/",
+    }
+
+
 def _segment_remote(task: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
     """A mesh and outputs named by URIs (pyarrow.fs): download, segment, upload."""
     from pyarrow import fs as pafs
@@ -96,11 +112,18 @@ def upload(local: str, uri: str) -> None:
 
 def process(task: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
     """Segments the mesh ``task["source"]`` with ``params`` (the keyword arguments of
-    :func:`bvseg.segment`) and writes ``task["outputs"]``; returns its summary row. Never
-    raises: a failure is a row with status ``error`` and the message."""
+    :func:`bvseg.segment`) and writes ``task["outputs"]``, or runs the robot of a task with
+    ``task["robot"]``; returns its summary row. Never raises: a failure is a row with status
+    ``error`` and the message."""
     start = time.perf_counter()
     try:
-        if task.get("remote"):
+        if task.get("robot") and task.get("remote"):
+            raise ValueError(
+                f"{task['file']}: robots are read from and written to local directories (their meshes are files beside them)"
+            )
+        if task.get("robot"):
+            row = _robot_local(task)
+        elif task.get("remote"):
             row = _segment_remote(task, params)
         else:
             for out in task["outputs"]:

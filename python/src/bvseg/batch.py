@@ -1,16 +1,21 @@
-"""Segment every mesh of a directory tree, locally in a process pool or as a Ray Data pipeline.
+"""Segment every mesh and robot of a directory tree, locally in a process pool or as a Ray
+Data pipeline.
 
     python -m bvseg.batch IN_DIR OUT_DIR [--engine local|ray] [--glob PATTERN]
         [--formats json,glb,xml,obj] [--force] [--workers N | --concurrency N]
         [segment options: --k --tov --max-protrusion ... as ``bvseg batch``]
+        [robot options: --source --max-parts --total-parts --spheres-per-link --urdf-capsules]
 
 What ``bvseg batch DIR -o OUTDIR`` does, for a tree: every mesh under IN_DIR (recursively; by
 default the extensions the loader reads, or the files ``--glob`` matches), one output set per
 mesh in the mirror of its subdirectory under OUT_DIR, named as the command line names them
 (the file's stem, or its whole name where two meshes of a directory share a stem:
-``part.obj.json`` beside ``part.stl.json``). Outputs are written atomically, so an output that
-exists is complete, and a mesh whose outputs all exist is skipped (``--force`` redoes it): an
-interrupted batch resumes where it stopped. ``OUT_DIR/summary.csv`` (and ``summary.parquet``
+``part.obj.json`` beside ``part.stl.json``). Robots (every ``.urdf``, and each ``.xml`` whose
+root is ``<mujoco>`` and that bvseg did not write) run :func:`bvseg.robot` into a directory
+of their own under that name, one robot per task. Outputs are written atomically, so an
+output that exists is complete, and a mesh whose outputs all exist is skipped (a robot whose
+``curobo.yml``, written last, exists; ``--force`` redoes it): an interrupted batch resumes
+where it stopped. ``OUT_DIR/summary.csv`` (and ``summary.parquet``
 when pyarrow is importable) has one row per mesh, sorted by file: file, status (done, skipped,
 error), triangles, k, tov, mov, protrusion_rel, tolerances_met, seconds, message (the error,
 or the mesh's warnings). Exit status 0, or 2 when some mesh failed (3 with ``--strict`` when
@@ -18,7 +23,9 @@ some missed its tolerances), as ``bvseg batch``.
 
 IN_DIR and OUT_DIR may also be URIs pyarrow.fs understands (``s3://bucket/meshes``,
 ``gs://...``, ``file:///abs/path``): each worker then downloads its mesh to a temporary
-directory and uploads its outputs. See the package's README for running on a Ray cluster.
+directory and uploads its outputs. Robots, whose meshes are other files, are read from a
+local IN_DIR only (a ``.urdf`` under a URI is an error row; ``.xml`` files there are not
+looked at). See the package's README for running on a Ray cluster.
 """
 
 from __future__ import annotations
@@ -41,6 +48,9 @@ from ._worker import COLUMNS
 #: The output formats, by extension, as ``bvseg batch --formats``.
 FORMATS = ("json", "glb", "xml", "obj")
 
+#: The keyword arguments of :func:`bvseg.robot` beside :func:`bvseg.segment`'s.
+ROBOT_OPTIONS = ("source", "max_parts", "total_parts", "spheres_per_link", "urdf_capsules")
+
 
 def _is_uri(s: str) -> bool:
     return "://" in s
@@ -49,13 +59,28 @@ def _is_uri(s: str) -> bool:
 # --- listing ---------------------------------------------------------------------------------
 
 
-def _matches(rel: str, pattern: str | None) -> bool:
+def _is_robot(base: str, rel: str) -> bool:
+    """Whether ``rel`` under ``base`` is a robot: a ``.urdf``, or (in a local directory) an
+    MJCF ``.xml`` that bvseg did not write."""
+    ext = PurePosixPath(rel).suffix.lower()
+    if ext == ".urdf":
+        return True
+    if ext not in (".xml", ".mjcf") or _is_uri(base):
+        return False
+    from . import _bvseg
+
+    return _bvseg.robot_format(_join(base, rel)) == "mjcf"
+
+
+def _matches(rel: str, pattern: str | None, base: str = "") -> bool:
     """Whether the relative path ``rel`` (posix) is selected: by ``pattern`` (a glob where
-    ``*`` does not cross ``/`` and ``**/`` is any number of directories), else by extension."""
+    ``*`` does not cross ``/`` and ``**/`` is any number of directories), else by extension
+    (a mesh) or content (a robot, :func:`_is_robot`)."""
     if pattern is None:
         from . import MESH_EXTENSIONS
 
-        return PurePosixPath(rel).suffix.lower().lstrip(".") in MESH_EXTENSIONS
+        ext = PurePosixPath(rel).suffix.lower().lstrip(".")
+        return ext in MESH_EXTENSIONS or _is_robot(base, rel)
     parts, pats = rel.split("/"), pattern.split("/")
 
     def match(i: int, j: int) -> bool:
@@ -69,10 +94,12 @@ def _matches(rel: str, pattern: str | None) -> bool:
 
 
 def list_meshes(in_dir: str, pattern: str | None = None) -> list[str]:
-    """The relative paths (posix, sorted) of the meshes under ``in_dir`` (a directory or a
-    pyarrow.fs URI), recursively: those whose extension the loader reads, or those ``pattern``
-    matches (``"**/*.obj"``, ``"chairs/*.glb"``). Hidden files and directories (a leading
-    ``.``) are left out, as are the temporary files of interrupted writes."""
+    """The relative paths (posix, sorted) of the meshes and robots under ``in_dir`` (a
+    directory or a pyarrow.fs URI), recursively: those whose extension the loader reads and
+    the robots (:func:`_is_robot`), or those ``pattern`` matches (``"**/*.obj"``,
+    ``"chairs/*.glb"``, ``"**/*.urdf"``), less the files a robot among them uses (its meshes,
+    the MJCF files it includes). Hidden files and directories (a leading ``.``) are left out,
+    as are the temporary files of interrupted writes."""
     rels: list[str] = []
     if _is_uri(in_dir):
         from pyarrow import fs as pafs
@@ -93,7 +120,16 @@ def list_meshes(in_dir: str, pattern: str | None = None) -> list[str]:
     def hidden(r: str) -> bool:
         return any(p.startswith(".") for p in r.split("/"))
 
-    return sorted(r for r in rels if not hidden(r) and _matches(r, pattern))
+    picked = [r for r in rels if not hidden(r) and _matches(r, pattern, in_dir)]
+    # A robot's own meshes and included files are part of it, not inputs of their own.
+    used: set[str] = set()
+    if not _is_uri(in_dir):
+        from . import _bvseg
+
+        for r in picked:
+            if _is_robot(in_dir, r):
+                used.update(_bvseg.robot_uses(_join(in_dir, r)))
+    return sorted(r for r in picked if os.path.realpath(_join(in_dir, r)) not in used)
 
 
 def output_bases(rels: Sequence[str], others: Iterable[str] = ()) -> list[str]:
@@ -307,10 +343,13 @@ def run(
     workers: int | None = None,
     concurrency: int | None = None,
     params: dict[str, Any] | None = None,
+    robot_options: dict[str, Any] | None = None,
     quiet: bool = True,
 ) -> list[dict[str, Any]]:
-    """The batch as a function: segments every mesh under ``in_dir`` into ``out_dir`` and
-    writes the summary; returns the rows (sorted by file). ``engine`` is ``"local"`` (a
+    """The batch as a function: segments every mesh and robot under ``in_dir`` into
+    ``out_dir`` and writes the summary; returns the rows (sorted by file). ``robot_options``
+    are :func:`bvseg.robot`'s own keyword arguments (``source``, ``max_parts``,
+    ``total_parts``, ``spheres_per_link``, ``urdf_capsules``), for the robots. ``engine`` is ``"local"`` (a
     process pool of ``workers``, default one per core) or ``"ray"`` (Ray Data, at most
     ``concurrency`` tasks at once; joins ``RAY_ADDRESS`` or the Ray already initialised, else
     starts a local one). ``params`` are :func:`bvseg.segment`'s keyword arguments; ``threads``
@@ -329,6 +368,12 @@ def run(
         if ext not in exts:
             exts.append(ext)
     params = {k: v for k, v in (params or {}).items() if v is not None}
+    robot_options = {k: v for k, v in (robot_options or {}).items() if v is not None}
+    for k in robot_options:
+        if k not in ROBOT_OPTIONS:
+            raise TypeError(f"robot_options: unknown option {k!r} (it takes {', '.join(ROBOT_OPTIONS)})")
+    # A robot's links always get a JSON document, which carries the hierarchy.
+    robot_params = dict(params)
     # Only the JSON document carries the hierarchy: without it, the runs skip building it.
     params.setdefault("hierarchy", "json" in exts)
     cores = os.cpu_count() or 1
@@ -344,7 +389,7 @@ def run(
     bases = output_bases(rels, list_meshes(in_dir) if glob is not None else ())
     if not rels:
         raise FileNotFoundError(
-            f"{in_dir}: no mesh files ({glob or ', '.join(bvseg.MESH_EXTENSIONS)}) under the directory"
+            f"{in_dir}: no mesh files ({glob or ', '.join(bvseg.MESH_EXTENSIONS)}) nor robots under the directory"
         )
     if engine == "local":
         workers = min(workers or cores, len(rels))
@@ -352,6 +397,7 @@ def run(
     else:
         params.setdefault("threads", 1)
     bvseg._bvseg.check_params(**params)  # the errors segment() would raise, before any work
+    robot_params.setdefault("threads", params["threads"])
     if not _is_uri(out_dir):
         os.makedirs(out_dir, exist_ok=True)
 
@@ -359,6 +405,17 @@ def run(
     tasks: list[dict[str, Any]] = []
     remote = _is_uri(in_dir) or _is_uri(out_dir)
     for rel, base in zip(rels, bases):
+        if _is_robot(in_dir, rel):
+            robot_dir = _join(out_dir, base)
+            if not force and _exists(_join(robot_dir, bvseg._bvseg.ROBOT_DONE_FILE)):
+                rows.append(_worker.empty_row(rel, "skipped", "outputs exist"))
+                _say(quiet, _progress_line(len(rows), len(rels), rows[-1]))
+                continue
+            tasks.append({
+                "file": rel, "source": _join(in_dir, rel), "outputs": [], "remote": remote,
+                "robot": {"out_dir": robot_dir, "base": base, "params": robot_params, "options": robot_options},
+            })
+            continue
         outs = [_join(out_dir, f"{base}.{e}") for e in exts]
         if not force and all(_exists(o) for o in outs):
             rows.append(_skipped(rel, _join(out_dir, f"{base}.json") if "json" in exts else None))
@@ -418,7 +475,13 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--no-merge", action="store_true", help="do not merge parts at the end")
     s.add_argument("--no-polish", action="store_true", help="do not polish the part boundaries")
     s.add_argument("--margin", type=float, help=f"grow every volume by this, in mesh units {d('margin')}")
-    s.add_argument("--timeout", type=float, metavar="SECONDS", help="give up on a mesh after this long")
+    s.add_argument("--timeout", type=float, metavar="SECONDS", help="give up on a mesh (a whole robot) after this long")
+    r = p.add_argument_group("robot options (as bvseg robot)")
+    r.add_argument("--source", choices=("collision", "visual"), help="which meshes of each link to segment (default: collision)")
+    r.add_argument("--max-parts", type=int, metavar="N", help="most parts per link")
+    r.add_argument("--total-parts", type=int, metavar="N", help="most parts per robot, shared among its links by volume")
+    r.add_argument("--spheres-per-link", type=int, metavar="N", help="most spheres per link in curobo.yml (default: 16)")
+    r.add_argument("--urdf-capsules", action="store_true", help="write capsules as URDF 1.1 <capsule>")
     return p
 
 
@@ -435,6 +498,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         params["merge"] = False
     if args.no_polish:
         params["polish"] = False
+    robot_options = {name: getattr(args, name) for name in ROBOT_OPTIONS}
     try:
         rows = run(
             args.in_dir,
@@ -446,6 +510,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             workers=args.workers,
             concurrency=args.concurrency,
             params=params,
+            robot_options=robot_options,
             quiet=args.quiet,
         )
     except (ValueError, TypeError, OSError) as e:

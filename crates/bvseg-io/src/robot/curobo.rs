@@ -16,9 +16,9 @@ fn key(s: &str) -> String {
 }
 
 /// `collision_spheres: {LINK: [{center: [x, y, z], radius: r}]}` in each link's frame, from
-/// `spheres` (each link's sphere-only segmentation, by link index; a volume that is not a
-/// sphere is written as its enclosing sphere), and `self_collision_ignore: {LINK: [...]}`
-/// listing each link's parent and children.
+/// `spheres` (each link's sphere-only segmentation, by link index) and the link's kept
+/// primitives (a volume that is not a sphere is written as the sphere around its bounding
+/// box), and `self_collision_ignore: {LINK: [...]}` listing each link's parent and children.
 pub fn to_curobo(robot: &Robot, spheres: LinkResults) -> String {
     let mut s = format!(
         "# {}: collision spheres for {}\ncollision_spheres:\n",
@@ -26,12 +26,17 @@ pub fn to_curobo(robot: &Robot, spheres: LinkResults) -> String {
         robot.name
     );
     for (i, link) in robot.links.iter().enumerate() {
-        let Some(Some(seg)) = spheres.get(i) else {
+        let seg = spheres.get(i).and_then(Option::as_ref);
+        let volumes: Vec<&bvseg_core::BoundingVolume> = seg
+            .into_iter()
+            .flat_map(|s| s.parts.iter().map(|p| &p.volume))
+            .chain(&link.kept)
+            .collect();
+        if volumes.is_empty() {
             continue;
-        };
+        }
         let _ = writeln!(s, "  {}:", key(&link.name));
-        for p in &seg.parts {
-            let v = &p.volume;
+        for v in volumes {
             let (c, r) = if v.shape == bvseg_core::Shape::Sphere {
                 (v.center, v.radius())
             } else {

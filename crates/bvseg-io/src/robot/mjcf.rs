@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
+use bvseg_core::{BoundingVolume, Shape};
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::{
@@ -15,14 +16,23 @@ use crate::export::part_color;
 use crate::IoError;
 
 /// The text with every `<include file=...>` replaced by the children of the included file's
-/// root, recursively; `chain` holds the files being expanded, to find cycles.
-fn expand(path: &Path, text: &str, chain: &mut Vec<PathBuf>) -> Result<String, IoError> {
+/// root, recursively; an included name is looked up, as MuJoCo does, in the main file's
+/// directory `main_dir`, then beside the including file. `chain` holds the files being
+/// expanded (canonical path, and as named), to find cycles; `included` gets every file
+/// included.
+fn expand(
+    path: &Path,
+    main_dir: &Path,
+    text: &str,
+    chain: &mut Vec<(PathBuf, String)>,
+    included: &mut Vec<PathBuf>,
+) -> Result<String, IoError> {
     let name = path.display().to_string();
     let doc = roxmltree::Document::parse(text).map_err(|e| IoError::Robot {
         name: name.clone(),
         message: e.to_string(),
     })?;
-    let dir = path.parent().unwrap_or(Path::new("."));
+    let dir = path.parent().unwrap_or(Path::new(""));
     let mut out = String::with_capacity(text.len());
     let mut pos = 0;
     for node in doc.descendants().filter(|n| n.has_tag_name("include")) {
@@ -34,20 +44,24 @@ fn expand(path: &Path, text: &str, chain: &mut Vec<PathBuf>) -> Result<String, I
             name: name.clone(),
             message: "an <include> has no file".into(),
         })?;
-        let inc = dir.join(file);
+        let inc = [main_dir.join(file), dir.join(file)]
+            .into_iter()
+            .find(|p| p.is_file())
+            .unwrap_or_else(|| main_dir.join(file));
         let key = inc.canonicalize().unwrap_or_else(|_| inc.clone());
-        if chain.contains(&key) {
-            let mut names: Vec<String> = chain.iter().map(|p| p.display().to_string()).collect();
-            names.push(key.display().to_string());
+        let inc_name = inc.display().to_string();
+        if chain.iter().any(|(k, _)| *k == key) {
+            let mut names: Vec<&str> = chain.iter().map(|(_, n)| n.as_str()).collect();
+            names.push(&inc_name);
             return Err(IoError::IncludeCycle {
-                name,
+                name: chain[0].1.clone(),
                 chain: names.join(" -> "),
             });
         }
-        let inc_name = inc.display().to_string();
         let inc_text = read_text(&inc, &inc_name)?;
-        chain.push(key);
-        let inner = expand(&inc, &inc_text, chain)?;
+        included.push(key.clone());
+        chain.push((key, inc_name.clone()));
+        let inner = expand(&inc, main_dir, &inc_text, chain, included)?;
         chain.pop();
         let inner_doc = roxmltree::Document::parse(&inner).map_err(|e| IoError::Robot {
             name: inc_name.clone(),
@@ -66,6 +80,17 @@ fn expand(path: &Path, text: &str, chain: &mut Vec<PathBuf>) -> Result<String, I
     Ok(out)
 }
 
+/// The files an MJCF file includes, directly or not (canonical paths), as far as they can
+/// be read.
+pub(crate) fn included_files(path: &Path, text: &str) -> Vec<PathBuf> {
+    let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let mut included = Vec::new();
+    let name = path.display().to_string();
+    let _ = expand(path, &dir, text, &mut vec![(key, name)], &mut included);
+    included
+}
+
 pub(crate) fn parse(
     path: &Path,
     name: &str,
@@ -77,7 +102,15 @@ pub(crate) fn parse(
         message,
     };
     let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-    let text = expand(path, &text, &mut vec![key])?;
+    // Empty for a bare file name: paths joined to it stay as short as the user gave them.
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let text = expand(
+        path,
+        &dir,
+        &text,
+        &mut vec![(key, name.to_owned())],
+        &mut Vec::new(),
+    )?;
     let doc = roxmltree::Document::parse(&text).map_err(|e| bad(e.to_string()))?;
     let root = doc.root_element();
     if root.tag_name().name() != "mujoco" {
@@ -86,57 +119,59 @@ pub(crate) fn parse(
             root.tag_name().name()
         )));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let compiler = root.descendants().find(|n| n.has_tag_name("compiler"));
-    let degrees = compiler.and_then(|c| c.attribute("angle")) != Some("radian");
+    // Every <compiler> counts, a later attribute over an earlier one (includes may add one).
+    let mut compiler: BTreeMap<&str, &str> = BTreeMap::new();
+    for c in root.children().filter(|n| n.has_tag_name("compiler")) {
+        for a in c.attributes() {
+            compiler.insert(a.name(), a.value());
+        }
+    }
+    let degrees = compiler.get("angle").copied() != Some("radian");
+    let eulerseq =
+        euler_sequence(compiler.get("eulerseq").copied().unwrap_or("xyz")).ok_or_else(|| {
+            bad(format!(
+                "compiler eulerseq {:?}: expected three of x, y, z, X, Y, Z",
+                compiler.get("eulerseq").copied().unwrap_or_default()
+            ))
+        })?;
     let meshdir = compiler
-        .and_then(|c| c.attribute("meshdir").or(c.attribute("assetdir")))
+        .get("meshdir")
+        .or(compiler.get("assetdir"))
         .map_or(dir.clone(), |m| dir.join(m));
-    // Geom attributes of each default class (a class inherits its parent's).
-    let mut classes: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
-    fn defaults<'a>(
-        node: roxmltree::Node<'a, 'a>,
-        inherited: &BTreeMap<String, String>,
-        classes: &mut BTreeMap<String, BTreeMap<String, String>>,
-    ) {
-        let mut attrs = inherited.clone();
-        if let Some(g) = node.children().find(|n| n.has_tag_name("geom")) {
-            for a in g.attributes() {
-                attrs.insert(a.name().to_owned(), a.value().to_owned());
-            }
-        }
-        let class = node.attribute("class").unwrap_or("main").to_owned();
-        for c in node.children().filter(|n| n.has_tag_name("default")) {
-            defaults(c, &attrs, classes);
-        }
-        classes.insert(class, attrs);
-    }
+    let mut classes: BTreeMap<String, Defaults> = BTreeMap::new();
     for d in root.children().filter(|n| n.has_tag_name("default")) {
-        defaults(d, &BTreeMap::new(), &mut classes);
+        defaults(d, &Defaults::default(), &mut classes);
     }
+    let no_defaults = Defaults::default();
     let mut assets: BTreeMap<String, (String, DVec3)> = BTreeMap::new();
     for m in root
         .children()
         .filter(|n| n.has_tag_name("asset"))
         .flat_map(|a| a.children().filter(|n| n.has_tag_name("mesh")))
     {
-        let Some(file) = m.attribute("file") else {
-            continue;
+        let class = m.attribute("class").unwrap_or("main");
+        let d = match classes.get(class) {
+            Some(d) => d,
+            None if class == "main" => &no_defaults,
+            None => return Err(bad(format!("mesh asset: unknown default class {class:?}"))),
         };
-        let mesh_name = m.attribute("name").map(str::to_owned).unwrap_or_else(|| {
-            Path::new(file)
+        let attr = |a: &str| m.attribute(a).or(d.mesh.get(a).map(String::as_str));
+        let file = attr("file");
+        let mesh_name = match (m.attribute("name"), file) {
+            (Some(n), _) => n.to_owned(),
+            (None, Some(f)) => Path::new(f)
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        });
-        let scale = vec3(m.attribute("scale"), DVec3::ONE, "mesh scale", name)?;
-        assets.insert(mesh_name, (file.to_owned(), scale));
+                .unwrap_or_default(),
+            (None, None) => continue,
+        };
+        // A mesh given by its vertices in the file (no file) is recorded as such, so that a
+        // geom using it gets a message that says so.
+        let scale = vec3(attr("scale"), DVec3::ONE, "mesh scale", name)?;
+        assets.insert(mesh_name, (file.unwrap_or_default().to_owned(), scale));
     }
     let world = root
-        .descendants()
+        .children()
         .find(|n| n.has_tag_name("worldbody"))
         .ok_or_else(|| bad("no <worldbody>".into()))?;
     let mut robot = Robot {
@@ -150,62 +185,162 @@ pub(crate) fn parse(
     let ctx = Ctx {
         name,
         degrees,
+        eulerseq,
         meshdir: &meshdir,
         classes: &classes,
         assets: &assets,
         source,
     };
-    for b in world.children().filter(|n| n.has_tag_name("body")) {
-        body(&ctx, b, None, "main", &mut robot)?;
+    // The world's own geoms are not a link's; its bodies (also inside <frame>s) are roots.
+    let mut scratch = Link {
+        name: "world".into(),
+        meshes: Vec::new(),
+        kept: Vec::new(),
+        placement: DAffine3::IDENTITY,
+        replace: Vec::new(),
+        insert_at: None,
+    };
+    let mut roots = Vec::new();
+    ctx.children(
+        world,
+        DAffine3::IDENTITY,
+        "main",
+        &mut scratch,
+        &mut roots,
+        false,
+    )?;
+    for (b, frame, class) in roots {
+        body(&ctx, b, None, frame, &class, &mut robot)?;
     }
     Ok(robot)
+}
+
+/// The geom and mesh attributes of a default class (a class inherits its parent's).
+#[derive(Debug, Clone, Default)]
+struct Defaults {
+    geom: BTreeMap<String, String>,
+    mesh: BTreeMap<String, String>,
+}
+
+fn defaults(node: roxmltree::Node, inherited: &Defaults, classes: &mut BTreeMap<String, Defaults>) {
+    let mut d = inherited.clone();
+    for (tag, map) in [("geom", &mut d.geom), ("mesh", &mut d.mesh)] {
+        if let Some(g) = node.children().find(|n| n.has_tag_name(tag)) {
+            for a in g.attributes() {
+                map.insert(a.name().to_owned(), a.value().to_owned());
+            }
+        }
+    }
+    for c in node.children().filter(|n| n.has_tag_name("default")) {
+        defaults(c, &d, classes);
+    }
+    let class = node.attribute("class").unwrap_or("main").to_owned();
+    classes.insert(class, d);
+}
+
+/// A compiler `eulerseq`: three axes, lower case for axes that turn with the frame
+/// (intrinsic), upper case for fixed ones (extrinsic).
+fn euler_sequence(s: &str) -> Option<[u8; 3]> {
+    match s.as_bytes() {
+        &[a, b, c] if [a, b, c].iter().all(|x| b"xyzXYZ".contains(x)) => Some([a, b, c]),
+        _ => None,
+    }
 }
 
 struct Ctx<'a> {
     name: &'a str,
     degrees: bool,
+    eulerseq: [u8; 3],
     meshdir: &'a Path,
-    classes: &'a BTreeMap<String, BTreeMap<String, String>>,
+    classes: &'a BTreeMap<String, Defaults>,
     assets: &'a BTreeMap<String, (String, DVec3)>,
     source: MeshSource,
 }
 
+/// A child body to read: its element, the frame its `pos` and orientation are given in
+/// (the parent body's, or a `<frame>` inside it), and its default class.
+type Pending<'a, 'i> = (roxmltree::Node<'a, 'i>, DAffine3, String);
+
 impl Ctx<'_> {
     /// A geom's attribute, else its class's default.
-    fn attr<'n>(&'n self, node: roxmltree::Node<'n, 'n>, class: &str, a: &str) -> Option<&'n str> {
-        node.attribute(a).or_else(|| {
-            let c = node.attribute("class").unwrap_or(class);
-            self.classes
-                .get(c)
-                .and_then(|m| m.get(a))
-                .map(String::as_str)
-        })
+    fn attr<'n>(
+        &'n self,
+        node: roxmltree::Node<'n, 'n>,
+        d: &'n Defaults,
+        a: &str,
+    ) -> Option<&'n str> {
+        node.attribute(a)
+            .or_else(|| d.geom.get(a).map(String::as_str))
     }
 
-    /// An element's `pos` and orientation (`quat`, `euler` as XYZ, `axisangle`).
+    /// An element's `pos` and orientation (`quat`, `axisangle`, `euler` in the compiler's
+    /// `eulerseq`, `xyaxes`, `zaxis`; angles in the compiler's unit).
     fn frame(&self, node: roxmltree::Node) -> Result<DAffine3, IoError> {
         let pos = vec3(node.attribute("pos"), DVec3::ZERO, "pos", self.name)?;
+        Ok(DAffine3::from_rotation_translation(
+            self.orientation(node)?,
+            pos,
+        ))
+    }
+
+    fn orientation(&self, node: roxmltree::Node) -> Result<DQuat, IoError> {
         let angle = |x: f64| if self.degrees { x.to_radians() } else { x };
-        let rot = if let Some(q) = node.attribute("quat") {
-            match numbers(q, "quat", self.name)?[..] {
-                [w, x, y, z] => DQuat::from_xyzw(x, y, z, w).normalize(),
-                _ => return Err(self.bad(format!("quat {q:?}: expected 4 numbers"))),
+        let unit = |v: DVec3, what: &str| {
+            let n = v.normalize_or_zero();
+            if n == DVec3::ZERO {
+                Err(self.bad(format!("{what}: a zero vector")))
+            } else {
+                Ok(n)
             }
-        } else if let Some(e) = node.attribute("euler") {
-            let v = vec3(Some(e), DVec3::ZERO, "euler", self.name)?;
-            // MJCF's default sequence `xyz`: intrinsic rotations about moving axes.
-            DQuat::from_rotation_x(angle(v.x))
-                * DQuat::from_rotation_y(angle(v.y))
-                * DQuat::from_rotation_z(angle(v.z))
-        } else if let Some(aa) = node.attribute("axisangle") {
-            match numbers(aa, "axisangle", self.name)?[..] {
-                [x, y, z, a] => DQuat::from_axis_angle(DVec3::new(x, y, z).normalize(), angle(a)),
-                _ => return Err(self.bad(format!("axisangle {aa:?}: expected 4 numbers"))),
-            }
-        } else {
-            DQuat::IDENTITY
         };
-        Ok(DAffine3::from_rotation_translation(rot, pos))
+        if let Some(q) = node.attribute("quat") {
+            return match numbers(q, "quat", self.name)?[..] {
+                [w, x, y, z] if (w, x, y, z) != (0.0, 0.0, 0.0, 0.0) => {
+                    Ok(DQuat::from_xyzw(x, y, z, w).normalize())
+                }
+                _ => Err(self.bad(format!("quat {q:?}: expected 4 numbers, not all 0"))),
+            };
+        }
+        if let Some(aa) = node.attribute("axisangle") {
+            return match numbers(aa, "axisangle", self.name)?[..] {
+                [x, y, z, a] => Ok(DQuat::from_axis_angle(
+                    unit(DVec3::new(x, y, z), "axisangle")?,
+                    angle(a),
+                )),
+                _ => Err(self.bad(format!("axisangle {aa:?}: expected 4 numbers"))),
+            };
+        }
+        if let Some(e) = node.attribute("euler") {
+            let v = vec3(Some(e), DVec3::ZERO, "euler", self.name)?;
+            let mut q = DQuat::IDENTITY;
+            for (i, &c) in self.eulerseq.iter().enumerate() {
+                let axis = match c.to_ascii_lowercase() {
+                    b'x' => DVec3::X,
+                    b'y' => DVec3::Y,
+                    _ => DVec3::Z,
+                };
+                let r = DQuat::from_axis_angle(axis, angle(v[i]));
+                // Lower case: about the turned frame's axis (intrinsic), upper: the fixed one.
+                q = if c.is_ascii_lowercase() { q * r } else { r * q };
+            }
+            return Ok(q);
+        }
+        if let Some(xy) = node.attribute("xyaxes") {
+            return match numbers(xy, "xyaxes", self.name)?[..] {
+                [a, b, c, d, e, f] => {
+                    let x = unit(DVec3::new(a, b, c), "xyaxes")?;
+                    let y = DVec3::new(d, e, f);
+                    let y = unit(y - x * x.dot(y), "xyaxes")?;
+                    Ok(DQuat::from_mat3(&glam::DMat3::from_cols(x, y, x.cross(y))).normalize())
+                }
+                _ => Err(self.bad(format!("xyaxes {xy:?}: expected 6 numbers"))),
+            };
+        }
+        if let Some(z) = node.attribute("zaxis") {
+            let z = unit(vec3(Some(z), DVec3::Z, "zaxis", self.name)?, "zaxis")?;
+            return Ok(z_to(z));
+        }
+        Ok(DQuat::IDENTITY)
     }
 
     fn bad(&self, message: String) -> IoError {
@@ -214,12 +349,201 @@ impl Ctx<'_> {
             message,
         }
     }
+
+    /// The defaults of `class`.
+    fn class(&self, class: &str, link: &str) -> Result<&Defaults, IoError> {
+        static NONE: std::sync::OnceLock<Defaults> = std::sync::OnceLock::new();
+        match self.classes.get(class) {
+            Some(d) => Ok(d),
+            None if class == "main" => Ok(NONE.get_or_init(Defaults::default)),
+            None => Err(self.bad(format!("body {link:?}: unknown default class {class:?}"))),
+        }
+    }
+
+    /// Reads the geoms of `node` (a body, the world body or a `<frame>`) into `link`, placed
+    /// by `frame` (the node's frame in the link's), and lists its child bodies in `bodies`;
+    /// `<frame>`s are followed with their transform and `childclass`. `geoms`: whether the
+    /// geoms count (not the world's).
+    fn children<'a, 'i>(
+        &self,
+        node: roxmltree::Node<'a, 'i>,
+        frame: DAffine3,
+        class: &str,
+        link: &mut Link,
+        bodies: &mut Vec<Pending<'a, 'i>>,
+        geoms: bool,
+    ) -> Result<(), IoError> {
+        for c in node.children().filter(|n| n.is_element()) {
+            match c.tag_name().name() {
+                "geom" if geoms => self.geom(c, frame, class, link)?,
+                "frame" => {
+                    let f = frame * self.frame(c)?;
+                    let cc = c.attribute("childclass").unwrap_or(class);
+                    self.class(cc, &link.name)?;
+                    self.children(c, f, cc, link, bodies, geoms)?;
+                }
+                "body" => bodies.push((c, frame, class.to_owned())),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// One geom: a mesh to segment, a colliding primitive to keep, or nothing.
+    fn geom(
+        &self,
+        g: roxmltree::Node,
+        frame: DAffine3,
+        class: &str,
+        link: &mut Link,
+    ) -> Result<(), IoError> {
+        let class = g.attribute("class").unwrap_or(class);
+        let d = self.class(class, &link.name)?;
+        let attr = |a: &str| self.attr(g, d, a);
+        let kind = attr("type").unwrap_or("sphere");
+        let off = |a: &str| attr(a).map(str::trim) == Some("0");
+        let collides = !(off("contype") && off("conaffinity"));
+        let mesh = attr("mesh");
+        // A primitive with a mesh is sized by MuJoCo from that mesh: segment the mesh.
+        if let Some(mesh) = mesh.filter(|_| kind == "mesh" || PRIMITIVES.contains(&kind)) {
+            if self.source == MeshSource::Collision && !collides {
+                return Ok(());
+            }
+            let (file, scale) = self.assets.get(mesh).ok_or_else(|| {
+                self.bad(format!(
+                    "body {:?}: geom names the mesh {mesh:?}, which no <mesh> asset defines",
+                    link.name
+                ))
+            })?;
+            if file.is_empty() {
+                return Err(self.bad(format!(
+                    "body {:?}: mesh {mesh:?} is given by its vertices in the file, which bvseg \
+                     does not read (give it a file)",
+                    link.name
+                )));
+            }
+            let path = resolve(self.meshdir, file).map_err(|tried| IoError::MissingMesh {
+                name: self.name.to_owned(),
+                link: link.name.clone(),
+                file: file.clone(),
+                tried: tried
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })?;
+            link.meshes.push(MeshRef {
+                path,
+                given: file.clone(),
+                scale: *scale,
+                origin: frame * self.frame(g)?,
+            });
+            return Ok(());
+        }
+        if collides && PRIMITIVES.contains(&kind) {
+            link.kept
+                .push(self.primitive(g, d, kind, frame, &link.name)?);
+        }
+        Ok(())
+    }
+
+    /// A colliding primitive geom as a volume in the link's frame.
+    fn primitive(
+        &self,
+        g: roxmltree::Node,
+        d: &Defaults,
+        kind: &str,
+        frame: DAffine3,
+        link: &str,
+    ) -> Result<BoundingVolume, IoError> {
+        let what = |m: &str| self.bad(format!("body {link:?}: {kind} geom: {m}"));
+        let mut size = [0.0; 3];
+        if let Some(s) = self.attr(g, d, "size") {
+            for (i, x) in numbers(s, "geom size", self.name)?
+                .into_iter()
+                .take(3)
+                .enumerate()
+            {
+                size[i] = x;
+            }
+        }
+        // `fromto` (capsule, cylinder, box, ellipsoid) gives the Z axis and half-length.
+        let (local, half) = match (self.attr(g, d, "fromto"), kind) {
+            (Some(ft), "capsule" | "cylinder" | "box" | "ellipsoid") => {
+                let v = numbers(ft, "geom fromto", self.name)?;
+                let [a, b, c, x, y, z] = v[..] else {
+                    return Err(what(&format!("fromto {ft:?}: expected 6 numbers")));
+                };
+                let (from, to) = (DVec3::new(a, b, c), DVec3::new(x, y, z));
+                let axis = (to - from).normalize_or_zero();
+                if axis == DVec3::ZERO {
+                    return Err(what("fromto: its two ends coincide"));
+                }
+                let rot = z_to(axis);
+                (
+                    DAffine3::from_rotation_translation(rot, (from + to) * 0.5),
+                    Some((to - from).length() * 0.5),
+                )
+            }
+            _ => (self.frame(g)?, None),
+        };
+        let f = frame * local;
+        let center = f.translation;
+        let axes = glam::DMat3::from_cols(
+            f.matrix3.x_axis.normalize(),
+            f.matrix3.y_axis.normalize(),
+            f.matrix3.z_axis.normalize(),
+        );
+        let (r, h) = (size[0], half.unwrap_or(size[1]));
+        let positive = |xs: &[f64]| xs.iter().all(|x| *x > 0.0 && x.is_finite());
+        let v = match kind {
+            "sphere" if positive(&[r]) => BoundingVolume::sphere(center, r),
+            "capsule" if positive(&[r, h]) => BoundingVolume::capsule(center, axes.z_axis, h, r),
+            "capsule" if positive(&[r]) => BoundingVolume::sphere(center, r),
+            "cylinder" if positive(&[r, h]) => BoundingVolume::cylinder(center, axes.z_axis, h, r),
+            "box" | "ellipsoid" => {
+                let e = DVec3::new(size[0], size[1], half.unwrap_or(size[2]));
+                if !positive(&e.to_array()) {
+                    return Err(what(&format!("size {e}: expected positive sizes")));
+                }
+                let shape = if kind == "box" {
+                    Shape::Obb
+                } else {
+                    Shape::Ellipsoid
+                };
+                BoundingVolume::frame(shape, center, axes, e)
+            }
+            _ => return Err(what(&format!("size {size:?}: expected positive sizes"))),
+        };
+        Ok(v)
+    }
 }
+
+/// The rotation that turns Z to the unit vector `v` about their common normal, as MuJoCo
+/// makes it for `zaxis` and `fromto` (for `v = -Z`: half a turn about X), so that the frame's
+/// X and Y axes are MuJoCo's too.
+fn z_to(v: DVec3) -> DQuat {
+    let axis = DVec3::Z.cross(v);
+    let s = axis.length();
+    if s < 1e-14 {
+        return if v.z < 0.0 {
+            DQuat::from_xyzw(1.0, 0.0, 0.0, 0.0)
+        } else {
+            DQuat::IDENTITY
+        };
+    }
+    DQuat::from_axis_angle(axis / s, s.atan2(v.z))
+}
+
+/// The primitive geom types bvseg keeps (planes, height fields and SDFs are not a link's
+/// solid).
+const PRIMITIVES: [&str; 5] = ["sphere", "capsule", "cylinder", "box", "ellipsoid"];
 
 fn body(
     ctx: &Ctx,
     node: roxmltree::Node,
     parent: Option<&str>,
+    frame: DAffine3,
     class: &str,
     robot: &mut Robot,
 ) -> Result<(), IoError> {
@@ -228,49 +552,25 @@ fn body(
         .map(str::to_owned)
         .unwrap_or_else(|| format!("body_{}", robot.links.len()));
     let class = node.attribute("childclass").unwrap_or(class);
+    // The body's frame in its parent's (or, for a root, in the world).
+    let origin = frame * ctx.frame(node)?;
     let mut link = Link {
         name: link_name.clone(),
         meshes: Vec::new(),
+        kept: Vec::new(),
+        placement: if parent.is_none() {
+            origin
+        } else {
+            DAffine3::IDENTITY
+        },
         replace: Vec::new(),
         insert_at: None,
     };
-    for g in node.children().filter(|n| n.has_tag_name("geom")) {
-        let mesh = ctx.attr(g, class, "mesh");
-        let kind =
-            ctx.attr(g, class, "type")
-                .unwrap_or(if mesh.is_some() { "mesh" } else { "sphere" });
-        let (Some(mesh), "mesh") = (mesh, kind) else {
-            continue;
-        };
-        let off = |a: &str| ctx.attr(g, class, a).map(str::trim) == Some("0");
-        if ctx.source == MeshSource::Collision && off("contype") && off("conaffinity") {
-            continue;
-        }
-        let (file, scale) = ctx.assets.get(mesh).ok_or_else(|| {
-            ctx.bad(format!(
-                "body {link_name:?}: geom names the mesh {mesh:?}, which no <mesh> asset defines"
-            ))
-        })?;
-        let path = resolve(ctx.meshdir, file).map_err(|tried| IoError::MissingMesh {
-            name: ctx.name.to_owned(),
-            link: link_name.clone(),
-            file: file.clone(),
-            tried: tried
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-        })?;
-        link.meshes.push(MeshRef {
-            path,
-            given: file.clone(),
-            scale: *scale,
-            origin: ctx.frame(g)?,
-        });
-    }
+    ctx.class(class, &link_name)?;
+    let mut kids = Vec::new();
+    ctx.children(node, DAffine3::IDENTITY, class, &mut link, &mut kids, true)?;
     robot.links.push(link);
     if let Some(parent) = parent {
-        let origin = ctx.frame(node)?;
         let (kind, axis, limit) = if node.children().any(|n| n.has_tag_name("freejoint")) {
             ("floating".to_owned(), DVec3::Z, None)
         } else if let Some(j) = node.children().find(|n| n.has_tag_name("joint")) {
@@ -309,8 +609,8 @@ fn body(
             limit,
         });
     }
-    for b in node.children().filter(|n| n.has_tag_name("body")) {
-        body(ctx, b, Some(&link_name), class, robot)?;
+    for (b, f, c) in kids {
+        body(ctx, b, Some(&link_name), f, &c, robot)?;
     }
     Ok(())
 }
@@ -365,8 +665,12 @@ pub fn to_mjcf_robot(robot: &Robot, results: LinkResults) -> String {
         let pad = "  ".repeat(depth + 2);
         let link = &robot.links[i];
         let mut head = format!("{pad}<body name=\"{}\"", escape(&link.name));
-        if let Some(j) = joint.map(|j| &robot.joints[j]) {
-            let (_, q, t) = j.origin.to_scale_rotation_translation();
+        let origin = match joint.map(|j| &robot.joints[j]) {
+            Some(j) => Some(j.origin),
+            None => (link.placement != DAffine3::IDENTITY).then_some(link.placement),
+        };
+        if let Some(origin) = origin {
+            let (_, q, t) = origin.to_scale_rotation_translation();
             let _ = write!(
                 head,
                 " pos=\"{} {} {}\" quat=\"{} {} {} {}\"",
@@ -420,6 +724,16 @@ pub fn to_mjcf_robot(robot: &Robot, results: LinkResults) -> String {
                 has_geom = true;
             }
         }
+        for (k, v) in link.kept.iter().enumerate() {
+            // The original's own primitives, in grey.
+            let name = format!("{}_kept_{k}", escape(&link.name));
+            let _ = writeln!(
+                s,
+                "{pad}  {}",
+                geom_element(v, &name, "", "0.5 0.5 0.5 0.6")
+            );
+            has_geom = true;
+        }
         if !has_geom {
             // A moving body needs mass; a link without meshes gets a token one.
             let _ = writeln!(
@@ -434,4 +748,93 @@ pub fn to_mjcf_robot(robot: &Robot, results: LinkResults) -> String {
     }
     s.push_str("  </worldbody>\n</mujoco>\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use std::f64::consts::FRAC_1_SQRT_2;
+
+    /// The body quaternions MuJoCo 4.0.0 compiles (`MjModel.body_quat`, w x y z) for
+    /// `euler="10 20 30"` in degrees under each `eulerseq`, and for the other orientations.
+    #[test]
+    fn orientations_are_mujocos() {
+        let eulers = [
+            (
+                "xyz",
+                [
+                    0.943_714_364_147_489,
+                    0.127_679_440_695_780_63,
+                    0.144_878_125_417_369_14,
+                    0.268_535_822_751_569_2,
+                ],
+            ),
+            (
+                "zyx",
+                [
+                    0.951_548_524_643_788_5,
+                    0.239_298_337_744_730_3,
+                    0.189_307_857_412,
+                    0.038_134_576_474_850_15,
+                ],
+            ),
+            (
+                "XYZ",
+                [
+                    0.951_548_524_643_788_5,
+                    0.038_134_576_474_850_15,
+                    0.189_307_857_412,
+                    0.239_298_337_744_730_3,
+                ],
+            ),
+            (
+                "zYx",
+                [
+                    0.943_714_364_147_489,
+                    0.268_535_822_751_569_2,
+                    0.189_307_857_412,
+                    0.038_134_576_474_850_15,
+                ],
+            ),
+        ];
+        let others = [
+            (
+                r#"xyaxes="0 1 0 -1 0 0""#,
+                [FRAC_1_SQRT_2, 0.0, 0.0, FRAC_1_SQRT_2],
+            ),
+            (
+                r#"zaxis="0 1 1""#,
+                [0.923_879_532_511_286_7, -0.382_683_432_365_089_8, 0.0, 0.0],
+            ),
+            (
+                r#"axisangle="0 1 0 20""#,
+                [0.984_807_753_012_208, 0.0, 0.173_648_177_666_930_33, 0.0],
+            ),
+            (r#"zaxis="0 0 -1""#, [0.0, 1.0, 0.0, 0.0]),
+        ];
+        let cases = eulers
+            .iter()
+            .map(|(seq, q)| (*seq, r#"euler="10 20 30""#.to_owned(), *q))
+            .chain(others.iter().map(|(a, q)| ("xyz", (*a).to_owned(), *q)));
+        for (seq, attr, [w, x, y, z]) in cases {
+            let xml = format!("<body {attr}/>");
+            let doc = roxmltree::Document::parse(&xml).unwrap();
+            let ctx = Ctx {
+                name: "t.xml",
+                degrees: true,
+                eulerseq: euler_sequence(seq).unwrap(),
+                meshdir: Path::new("."),
+                classes: &BTreeMap::new(),
+                assets: &BTreeMap::new(),
+                source: MeshSource::Collision,
+            };
+            let q = ctx.orientation(doc.root_element()).unwrap();
+            let want = DQuat::from_xyzw(x, y, z, w);
+            // The same rotation: q and -q are one.
+            let d = (q - want).length().min((q + want).length());
+            assert!(d < 1e-12, "{seq} {attr}: {q} != {want}");
+        }
+        assert!(euler_sequence("xyw").is_none() && euler_sequence("xy").is_none());
+    }
 }

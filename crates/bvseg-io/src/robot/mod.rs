@@ -8,19 +8,65 @@
 //! links, MJCF includes do not cycle.
 mod curobo;
 mod mjcf;
+mod run;
 mod urdf;
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use bvseg_core::Segmentation;
+use bvseg_core::{BoundingVolume, Segmentation};
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
 use crate::{IoError, LoadOptions, LoadedMesh};
 
 pub use curobo::to_curobo;
 pub use mjcf::to_mjcf_robot;
+pub use run::{
+    segment_robot, RobotError, RobotEvent, RobotOptions, RobotRun, DEFAULT_SPHERES_PER_LINK,
+    DONE_FILE,
+};
 pub use urdf::to_urdf;
+
+/// The robot file extensions [`read_robot`] reads (compared case-insensitively): `.urdf`,
+/// and `.xml` (or `.mjcf`) for MJCF.
+pub const ROBOT_EXTENSIONS: &[&str] = &["urdf", "xml", "mjcf"];
+
+/// The kind of robot file `path` is, reading no more than its start: a `.urdf` file, or an
+/// `.xml` or `.mjcf` file whose root element is `<mujoco>` and that bvseg did not write (its
+/// MJCF outputs open with its generator comment). `None` for anything else, and for a file
+/// that cannot be read. For listing a directory; [`read_robot`] does not need it.
+pub fn robot_format(path: &Path) -> Option<RobotFormat> {
+    use std::io::Read;
+    match crate::extension(path).as_deref() {
+        Some("urdf") => return path.is_file().then_some(RobotFormat::Urdf),
+        Some("xml") | Some("mjcf") => {}
+        _ => return None,
+    }
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .ok()?;
+    let text = String::from_utf8_lossy(&head);
+    let mut rest = text.trim_start_matches('\u{feff}').trim_start();
+    // The prolog: declarations, comments, a doctype.
+    while let Some(r) = rest.strip_prefix("<?").or_else(|| rest.strip_prefix("<!")) {
+        let end = if r.starts_with("--") {
+            r.find("-->")? + 3
+        } else {
+            r.find('>')? + 1
+        };
+        rest = r[end..].trim_start();
+    }
+    let tag = rest.strip_prefix("<mujoco")?;
+    if !tag.starts_with(|c: char| c.is_whitespace() || c == '>' || c == '/') {
+        return None;
+    }
+    let after = tag[tag.find('>')? + 1..].trim_start();
+    // Any version's: `GENERATOR` is "bvseg <version>".
+    (!after.starts_with("<!-- bvseg ")).then_some(RobotFormat::Mjcf)
+}
 
 /// The kind of robot file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +108,12 @@ pub struct Link {
     pub name: String,
     /// The meshes to segment, in file order.
     pub meshes: Vec<MeshRef>,
+    /// MJCF: the body's colliding primitive geoms (sphere, capsule, cylinder, box,
+    /// ellipsoid), in its frame, which the outputs keep beside the new volumes. (A URDF's
+    /// primitive collisions stay in its text.)
+    pub kept: Vec<BoundingVolume>,
+    /// MJCF: a root body's frame in the world (identity for every other link).
+    pub placement: DAffine3,
     /// URDF: byte ranges of the mesh `<collision>` elements to replace.
     pub(crate) replace: Vec<Range<usize>>,
     /// URDF: where new collisions go when there is nothing to replace (before `</link>`).
@@ -136,6 +188,33 @@ pub fn read_robot(path: impl AsRef<Path>, source: MeshSource) -> Result<Robot, I
     Ok(robot)
 }
 
+/// The files a robot file uses besides itself, as canonical paths: its links' mesh files
+/// (collision and visual, those that exist) and the files an MJCF includes. Best effort: what
+/// cannot be read is left out. A batch does not take these as inputs of their own: they are
+/// the robot's.
+pub fn robot_uses(path: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for source in [MeshSource::Collision, MeshSource::Visual] {
+        if let Ok(robot) = read_robot(path, source) {
+            out.extend(
+                robot
+                    .links
+                    .iter()
+                    .flat_map(|l| &l.meshes)
+                    .filter_map(|m| m.path.canonicalize().ok()),
+            );
+        }
+    }
+    if robot_format(path) == Some(RobotFormat::Mjcf) {
+        if let Ok(text) = read_text(path, &path.display().to_string()) {
+            out.extend(mjcf::included_files(path, &text));
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
 pub(crate) fn read_text(path: &Path, name: &str) -> Result<String, IoError> {
     let bytes = std::fs::read(path).map_err(|e| IoError::io(name, "read", e))?;
     if bytes.len() as u64 > crate::MAX_INPUT_BYTES {
@@ -164,6 +243,7 @@ fn check(robot: &Robot) -> Result<(), IoError> {
             let ext = crate::extension(&m.path);
             if !crate::MESH_EXTENSIONS.contains(&ext.as_deref().unwrap_or("")) {
                 return Err(IoError::Link {
+                    name: robot.file.clone(),
                     link: link.name.clone(),
                     source: Box::new(IoError::UnsupportedFormat {
                         name: m.path.display().to_string(),
@@ -202,6 +282,7 @@ impl Robot {
             return Ok(None);
         }
         let wrap = |e: IoError| IoError::Link {
+            name: self.file.clone(),
             link: link.name.clone(),
             source: Box::new(e),
         };

@@ -30,10 +30,8 @@ pub(crate) fn parse(
             root.tag_name().name()
         )));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    // Empty for a bare file name: paths joined to it stay as short as the user gave them.
+    let dir = path.parent().unwrap_or(Path::new(""));
     let want = match source {
         MeshSource::Collision => "collision",
         MeshSource::Visual => "visual",
@@ -50,6 +48,8 @@ pub(crate) fn parse(
                 let mut link = Link {
                     name: link_name,
                     meshes: Vec::new(),
+                    kept: Vec::new(),
+                    placement: DAffine3::IDENTITY,
                     replace: Vec::new(),
                     insert_at: None,
                 };
@@ -217,11 +217,21 @@ fn geometry(v: &BoundingVolume, capsules: bool) -> (String, DMat3) {
     }
 }
 
-/// The `<collision>` elements of a segmentation, each line starting with `indent`.
-fn collisions(seg: &Segmentation, link: &str, indent: &str, capsules: bool) -> String {
+/// The `<collision>` elements of a link: its segmentation's volumes (`<link>_bvseg_<i>`) and
+/// its kept primitives (`<link>_kept_<i>`), each line starting with `indent`.
+fn collisions(seg: Option<&Segmentation>, link: &Link, indent: &str, capsules: bool) -> String {
+    let parts = seg
+        .into_iter()
+        .flat_map(|s| s.parts.iter().map(|p| &p.volume))
+        .enumerate()
+        .map(|(i, v)| (format!("bvseg_{i}"), v));
+    let kept = link
+        .kept
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (format!("kept_{i}"), v));
     let mut s = String::new();
-    for (i, part) in seg.parts.iter().enumerate() {
-        let v = &part.volume;
+    for (tag, v) in parts.chain(kept) {
         let (geom, axes) = geometry(v, capsules);
         let center = if v.shape == Shape::Hull {
             let (lo, hi) = v.aabb();
@@ -232,9 +242,9 @@ fn collisions(seg: &Segmentation, link: &str, indent: &str, capsules: bool) -> S
         let rpy = matrix_rpy(axes);
         let _ = write!(
             s,
-            "{indent}<collision name=\"{}_bvseg_{i}\">\n{indent}  <origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\n\
+            "{indent}<collision name=\"{}_{tag}\">\n{indent}  <origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\n\
              {indent}  <geometry>\n{indent}    {geom}\n{indent}  </geometry>\n{indent}</collision>\n",
-            escape(link),
+            escape(&link.name),
             center.x,
             center.y,
             center.z,
@@ -261,9 +271,8 @@ pub fn to_urdf(robot: &Robot, results: LinkResults, capsules: bool) -> String {
     );
     for (i, link) in robot.links.iter().enumerate() {
         let _ = writeln!(s, "  <link name=\"{}\">", escape(&link.name));
-        if let Some(Some(seg)) = results.get(i) {
-            s.push_str(&collisions(seg, &link.name, "    ", capsules));
-        }
+        let seg = results.get(i).and_then(Option::as_ref);
+        s.push_str(&collisions(seg, link, "    ", capsules));
         s.push_str("  </link>\n");
     }
     for j in &robot.joints {
@@ -342,7 +351,7 @@ fn splice(robot: &Robot, results: LinkResults, capsules: bool) -> String {
             }
             (None, None) => continue,
         };
-        let new = collisions(seg, &link.name, &indent, capsules);
+        let new = collisions(Some(seg), link, &indent, capsules);
         let mut first = true;
         for r in &link.replace {
             let s = line_start(r.start);
