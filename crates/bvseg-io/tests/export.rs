@@ -491,3 +491,144 @@ fn a_skinned_character_is_written_skinned_and_animated() {
     }
     assert_eq!(colliders, seg.parts.len());
 }
+
+/// Parses an MJCF attribute of numbers.
+fn nums(node: roxmltree::Node, attr: &str) -> Vec<f64> {
+    node.attribute(attr)
+        .unwrap_or("")
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect()
+}
+
+/// A three-joint skeleton (turned and scaled rest frames) with parts bound to two of its
+/// bones: the MJCF is a ragdoll, a body per joint nested like the joints, a free joint at the
+/// root and a ball joint where a bone carries volumes, and composing the bodies' frames puts
+/// every geom where its volume is in the rest pose.
+#[test]
+fn mjcf_of_a_character_is_a_ragdoll_of_its_bones() {
+    use bvseg_core::{Joint, Skeleton};
+    use glam::DMat4;
+    let frame = |euler: (f64, f64, f64), scale: f64, at: DVec3| {
+        DMat4::from_scale_rotation_translation(
+            DVec3::splat(scale),
+            DQuat::from_euler(EulerRot::XYZ, euler.0, euler.1, euler.2),
+            at,
+        )
+    };
+    let joint = |name: &str, parent, rest| Joint {
+        name: name.into(),
+        parent,
+        rest,
+        node: None,
+    };
+    let mut seg = seg();
+    seg.skeleton = Some(Skeleton {
+        joints: vec![
+            joint(
+                "hip",
+                None,
+                frame((0.3, 0.1, -0.2), 100.0, DVec3::new(0.0, 1.0, 0.0)),
+            ),
+            joint(
+                "knee",
+                Some(0),
+                frame((-0.4, 0.6, 0.2), 100.0, DVec3::new(0.2, 0.5, 0.1)),
+            ),
+            joint(
+                "foot",
+                Some(1),
+                frame((0.1, 0.2, 0.3), 100.0, DVec3::new(0.3, 0.0, 0.4)),
+            ),
+        ],
+    });
+    let bones = [0, 1, 1, 0, 0, 1];
+    for (p, &b) in seg.parts.iter_mut().zip(&bones) {
+        p.bone = Some(b);
+    }
+    let text = to_mjcf(&seg, "walker");
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let bodies: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("body"))
+        .collect();
+    let names: Vec<_> = bodies
+        .iter()
+        .map(|b| b.attribute("name").unwrap())
+        .collect();
+    assert_eq!(names, ["hip", "knee", "foot"]);
+    // Nested like the joints.
+    assert_eq!(bodies[1].parent(), Some(bodies[0]));
+    assert_eq!(bodies[2].parent(), Some(bodies[1]));
+    let joint_of = |b: &roxmltree::Node| {
+        b.children()
+            .find(|c| c.has_tag_name("joint") || c.has_tag_name("freejoint"))
+            .map(|j| {
+                (
+                    j.tag_name().name().to_owned(),
+                    j.attribute("type").map(str::to_owned),
+                )
+            })
+    };
+    assert_eq!(joint_of(&bodies[0]), Some(("freejoint".into(), None)));
+    assert_eq!(
+        joint_of(&bodies[1]),
+        Some(("joint".into(), Some("ball".into())))
+    );
+    // The foot carries no volume: welded to the knee.
+    assert_eq!(joint_of(&bodies[2]), None);
+
+    // Each geom, composed through its bodies' frames, is its volume at rest.
+    let local = |n: roxmltree::Node| {
+        let p = nums(n, "pos");
+        let q = nums(n, "quat");
+        let t = if p.is_empty() {
+            DVec3::ZERO
+        } else {
+            DVec3::new(p[0], p[1], p[2])
+        };
+        let r = if q.is_empty() {
+            DQuat::IDENTITY
+        } else {
+            DQuat::from_xyzw(q[1], q[2], q[3], q[0])
+        };
+        glam::DAffine3::from_rotation_translation(r, t)
+    };
+    let mut seen = 0;
+    for g in doc.descendants().filter(|n| n.has_tag_name("geom")) {
+        let i: usize = g.attribute("name").unwrap()["part_".len()..]
+            .parse()
+            .unwrap();
+        let body = g.parent().unwrap();
+        assert_eq!(body.attribute("name"), Some(names[bones[i]]));
+        let mut world = local(g);
+        let mut at = Some(body);
+        while let Some(b) = at.filter(|b| b.has_tag_name("body")) {
+            world = local(b) * world;
+            at = b.parent();
+        }
+        let v = &seg.parts[i].volume;
+        if v.shape == Shape::Hull {
+            let name = g.attribute("mesh").unwrap();
+            let mesh = doc
+                .descendants()
+                .find(|n| n.has_tag_name("mesh") && n.attribute("name") == Some(name))
+                .unwrap();
+            let pts: Vec<DVec3> = nums(mesh, "vertex")
+                .chunks(3)
+                .map(|c| world.transform_point3(DVec3::new(c[0], c[1], c[2])))
+                .collect();
+            for p in v.hull_points() {
+                assert!(pts.iter().any(|q| (*q - p).length() < 1e-9), "part {i}");
+            }
+        } else {
+            assert!((world.translation - v.center).length() < 1e-9, "part {i}");
+            // The geom's Z is the capsule's or cylinder's axis, else its third axis.
+            let z = world.matrix3.z_axis;
+            assert!(z.dot(v.axes.z_axis).abs() > 1.0 - 1e-9, "part {i}");
+        }
+        assert_eq!(g.attribute("conaffinity"), Some("0"));
+        seen += 1;
+    }
+    assert_eq!(seen, seg.parts.len());
+}
