@@ -516,6 +516,8 @@ pub(crate) struct Character {
     /// The skeleton's joints' nodes, ascending.
     joint_nodes: Vec<usize>,
     rest_worlds: Vec<DMat4>,
+    /// [`Character::joint_matrices`] at rest.
+    rest_matrices: Vec<Vec<DMat4>>,
     pub(crate) influences: Vec<Influence>,
     animations: Vec<Animation>,
 }
@@ -572,18 +574,37 @@ impl Character {
         }
         let rest_worlds = nodes.worlds(&nodes.rest);
         let animations = read_animations(doc, buffers, name)?;
-        Ok(Some(Self {
+        let mut character = Self {
             nodes,
             skins,
             joint_nodes: joint_nodes.into_iter().collect(),
             rest_worlds,
+            rest_matrices: Vec::new(),
             influences: Vec::new(),
             animations,
-        }))
+        };
+        character.rest_matrices = character.joint_matrices(&character.rest_worlds);
+        Ok(Some(character))
     }
 
-    /// Where a vertex is when the nodes' world matrices are `worlds`.
-    fn place(&self, inf: &Influence, worlds: &[DMat4]) -> DVec3 {
+    /// Each skin's joint matrices (joint world times inverse bind matrix) when the nodes'
+    /// world matrices are `worlds`: computed once per pose, not once per vertex.
+    fn joint_matrices(&self, worlds: &[DMat4]) -> Vec<Vec<DMat4>> {
+        self.skins
+            .iter()
+            .map(|(nodes, ibm)| {
+                nodes
+                    .iter()
+                    .zip(ibm)
+                    .map(|(&n, m)| worlds[n] * *m)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Where a vertex is when the nodes' world matrices are `worlds` and the skins' joint
+    /// matrices `matrices` ([`Character::joint_matrices`]).
+    fn place(inf: &Influence, worlds: &[DMat4], matrices: &[Vec<DMat4>]) -> DVec3 {
         match *inf {
             Influence::Rigid { local, node } => worlds[node].transform_point3(local),
             Influence::Skinned {
@@ -591,20 +612,17 @@ impl Character {
                 skin,
                 joints,
                 ..
-            } => {
-                let (nodes, ibm) = &self.skins[skin];
-                joints
-                    .iter()
-                    .filter(|j| j.1 > 0.0)
-                    .map(|&(j, w)| (worlds[nodes[j]] * ibm[j]).transform_point3(local) * w)
-                    .sum()
-            }
+            } => joints
+                .iter()
+                .filter(|j| j.1 > 0.0)
+                .map(|&(j, w)| matrices[skin][j].transform_point3(local) * w)
+                .sum(),
         }
     }
 
     /// The rest position of a vertex, recorded with its influence.
     pub(crate) fn add(&mut self, inf: Influence) -> DVec3 {
-        let p = self.place(&inf, &self.rest_worlds);
+        let p = Self::place(&inf, &self.rest_worlds, &self.rest_matrices);
         self.influences.push(inf);
         p
     }
@@ -734,6 +752,7 @@ impl Character {
                 let worlds = self
                     .nodes
                     .worlds(&locals_at(&self.nodes, &self.animations[a], t));
+                let matrices = self.joint_matrices(&worlds);
                 Pose {
                     animation: a,
                     time: t,
@@ -741,7 +760,7 @@ impl Character {
                     vertices: self
                         .influences
                         .iter()
-                        .map(|inf| self.place(inf, &worlds))
+                        .map(|inf| Self::place(inf, &worlds, &matrices))
                         .collect(),
                 }
             })
