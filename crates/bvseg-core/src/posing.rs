@@ -83,18 +83,37 @@ pub fn posed_volumes(
         let mut points = cur.fits[i].hull.clone();
         let mut last: Vec<DVec3> = corners.iter().map(|c| c.1).collect();
         let mut left_out = false;
-        for (p, m) in skin.poses.iter().zip(&back) {
-            for (&(c, _), last) in corners.iter().zip(&mut last) {
-                let x = m.transform_point3(p.vertices[c as usize]);
+        // The corners carried back in this pose and the two before it, for the estimate of
+        // how far they stray between samples (see the module's docs).
+        let n = corners.len();
+        let (mut now, mut before, mut before2) = (
+            vec![DVec3::ZERO; n],
+            vec![DVec3::ZERO; n],
+            vec![DVec3::ZERO; n],
+        );
+        let mut worst = 0.0f64;
+        for (k, (p, m)) in skin.poses.iter().zip(&back).enumerate() {
+            for ((&(c, _), last), x) in corners.iter().zip(&mut last).zip(&mut now) {
+                *x = m.transform_point3(p.vertices[c as usize]);
                 if x.distance_squared(*last) > keep * keep {
-                    points.push(x);
-                    *last = x;
+                    points.push(*x);
+                    *last = *x;
                 } else {
                     left_out = true;
                 }
             }
+            let poses = &skin.poses;
+            if k >= 2
+                && (poses[k - 2].animation, poses[k - 1].animation) == (p.animation, p.animation)
+            {
+                for c in 0..n {
+                    worst = worst.max(segment_distance(before[c], before2[c], now[c]));
+                }
+            }
+            std::mem::swap(&mut before2, &mut before);
+            std::mem::swap(&mut before, &mut now);
         }
-        let mut margin = between_samples(skin, &back, &corners);
+        let mut margin = 0.5 * worst;
         if left_out {
             margin += keep;
         }
@@ -106,28 +125,6 @@ pub fn posed_volumes(
             v
         }
     })
-}
-
-/// Half the largest distance of a corner's sample in a pose from the segment between its
-/// samples in the poses before and after it (of the same animation), all carried back by
-/// the matrices `back` (see the module's docs).
-fn between_samples(skin: &Skin, back: &[DMat4], corners: &[(u32, DVec3)]) -> f64 {
-    let poses = &skin.poses;
-    let mut worst = 0.0f64;
-    for i in 1..poses.len().saturating_sub(1) {
-        let (a, m, b) = (&poses[i - 1], &poses[i], &poses[i + 1]);
-        if a.animation != m.animation || b.animation != m.animation {
-            continue;
-        }
-        for &(c, _) in corners {
-            let c = c as usize;
-            let x0 = back[i - 1].transform_point3(a.vertices[c]);
-            let x1 = back[i].transform_point3(m.vertices[c]);
-            let x2 = back[i + 1].transform_point3(b.vertices[c]);
-            worst = worst.max(segment_distance(x1, x0, x2));
-        }
-    }
-    0.5 * worst
 }
 
 /// Distance from `p` to the segment `[a, b]`.
