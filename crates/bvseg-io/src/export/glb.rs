@@ -13,12 +13,17 @@
 //!   encloses it. The hull meshes are referenced by node, outside the scene, so that viewers
 //!   do not draw them; `extras` hold the exact volume.
 //! - `input_mesh` (optional): the segmented mesh with vertex colours by part.
+//!
+//! For a character, the skeleton's joints are nodes under the root and each part's two nodes
+//! hang under its bone's joint; with the file's [`Skinning`], the joints are the file's own
+//! nodes, its animations move them, and `input_mesh` is the mesh skinned (a scene root of its
+//! own, as glTF wants skinned meshes).
 use bvseg_core::{Mesh, Segmentation, Shape};
+use glam::DVec3;
+use serde_json::{json, Value};
 
 use crate::character::{Interp, Local, Path};
 use crate::Skinning;
-use glam::DVec3;
-use serde_json::{json, Value};
 
 use super::proxy::{
     capsule_mesh, enclosing_sphere_hull, hull_mesh, hull_vertices, part_color, unit_cube,
