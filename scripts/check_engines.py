@@ -114,6 +114,28 @@ def reachable(doc):
     return seen
 
 
+def node_worlds(nodes):
+    """Each node's world matrix (4x4) from the TRS or matrix of it and its parents."""
+    parent = {c: i for i, n in enumerate(nodes) for c in n.get("children", [])}
+    local = []
+    for n in nodes:
+        if "matrix" in n:
+            local.append(np.array(n["matrix"], float).reshape(4, 4).T)
+        else:
+            m = np.eye(4)
+            m[:3, :3] = quat_xyzw_matrix(n.get("rotation", [0, 0, 0, 1])) * np.array(
+                n.get("scale", [1, 1, 1]), float)
+            m[:3, 3] = n.get("translation", [0, 0, 0])
+            local.append(m)
+    out = {}
+
+    def world(i):
+        if i not in out:
+            out[i] = local[i] if i not in parent else world(parent[i]) @ local[i]
+        return out[i]
+    return [world(i) for i in range(len(nodes))]
+
+
 def check_glb(path, volumes, diag, validation, rep):
     if validation is None:
         rep.fail("no validator report")
@@ -127,6 +149,9 @@ def check_glb(path, volumes, diag, validation, rep):
     colliders = {n["name"]: i for i, n in enumerate(nodes)
                  if "KHR_physics_rigid_bodies" in n.get("extensions", {})}
     in_scene = reachable(doc)
+    worlds = node_worlds(nodes)
+    parent = {c: i for i, n in enumerate(nodes) for c in n.get("children", [])}
+    joints = {j for skin in doc.get("skins", []) for j in skin["joints"]}
     if len(colliders) != len(volumes):
         rep.fail(f"{len(colliders)} collider nodes for {len(volumes)} volumes")
     for name, i in colliders.items():
@@ -140,11 +165,13 @@ def check_glb(path, volumes, diag, validation, rep):
             rep.fail(f"no {name}")
             continue
         node = nodes[colliders[name]]
-        t = np.array(node.get("translation", [0, 0, 0]), float)
-        rot = quat_xyzw_matrix(node.get("rotation", [0, 0, 0, 1]))
+        # World placement: a character's colliders hang under its joints.
+        t, rot = worlds[colliders[name]][:3, 3], worlds[colliders[name]][:3, :3]
         geom = node["extensions"]["KHR_physics_rigid_bodies"]["collider"]["geometry"]
         shape = v["shape"]
         where = f"part {k} ({shape})"
+        if "bone" in v and joints and parent.get(colliders[name]) not in joints:
+            rep.fail(f"{where}: the collider of a volume with a bone is not under a joint")
         if shape in ("sphere", "obb", "capsule", "cylinder"):
             if not close(t, v["center"], scale=diag):
                 rep.fail(f"{where}: translation {t.tolist()} != centre {v['center']}")
@@ -216,6 +243,10 @@ def check_glb(path, volumes, diag, validation, rep):
 def check_mjcf(path, volumes, diag, rep, mujoco):
     model = mujoco.MjModel.from_xml_path(path)
     data = mujoco.MjData(model)
+    # Geom frames in the world at qpos0: a character's ragdoll has its geoms in its bones'
+    # bodies, and must put them where the volumes are in the rest pose.
+    mujoco.mj_forward(model, data)
+    gpos, gmat = data.geom_xpos.copy(), data.geom_xmat.copy()
     for _ in range(STEPS):
         mujoco.mj_step(model, data)
     if not np.all(np.isfinite(data.qacc)) or not np.all(np.isfinite(data.geom_xpos)):
@@ -230,16 +261,18 @@ def check_mjcf(path, volumes, diag, rep, mujoco):
     want_type = {"sphere": G.mjGEOM_SPHERE, "capsule": G.mjGEOM_CAPSULE,
                  "cylinder": G.mjGEOM_CYLINDER, "ellipsoid": G.mjGEOM_ELLIPSOID,
                  "obb": G.mjGEOM_BOX, "hull": G.mjGEOM_MESH}
-    for k, v in enumerate(volumes[: model.ngeom]):
+    for k, v in enumerate(volumes):
         shape, where = v["shape"], f"part {k} ({v['shape']})"
-        gtype, size = model.geom_type[k], model.geom_size[k]
-        pos, xmat = model.geom_pos[k], np.empty(9)
-        mujoco.mju_quat2Mat(xmat, model.geom_quat[k])
-        xmat = xmat.reshape(3, 3)
-        # The body is welded to the world: after stepping, the geoms stay where the model
-        # puts them.
-        if not (close(data.geom_xpos[k], pos, scale=diag)
-                and close(data.geom_xmat[k].reshape(3, 3), xmat, scale=1.0)):
+        g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"part_{k}")
+        if g < 0:
+            rep.fail(f"{where}: no geom part_{k}")
+            continue
+        gtype, size = model.geom_type[g], model.geom_size[g]
+        pos, xmat = gpos[g], gmat[g].reshape(3, 3)
+        # Without joints the body is welded to the world: after stepping, the geoms stay
+        # where the model puts them.
+        if model.njnt == 0 and not (close(data.geom_xpos[g], pos, scale=diag)
+                                    and close(data.geom_xmat[g].reshape(3, 3), xmat, scale=1.0)):
             rep.fail(f"{where}: moved while stepping")
         want = want_type.get(shape)
         zero_capsule = shape == "capsule" and v["half_length"] == 0
@@ -266,7 +299,7 @@ def check_mjcf(path, volumes, diag, rep, mujoco):
                 if not parallel(xmat[:, j], v["axes"][j]):
                     rep.fail(f"{where}: geom axis {j} not along axes[{j}]")
         elif shape == "hull":
-            m = model.geom_dataid[k]
+            m = model.geom_dataid[g]
             start, count = model.mesh_vertadr[m], model.mesh_vertnum[m]
             local = model.mesh_vert[start: start + count].astype(float)
             world = pos + local @ xmat.T

@@ -14,8 +14,9 @@
 #   scripts/check_engines.sh BVSEG_BINARY [OUTDIR]
 #
 # Each bundled mesh is segmented at the defaults and at --k 16 with every engine target and
-# a few --bv kinds, writing OUTDIR/<mesh>_<config>.{json,glb,xml} (OUTDIR defaults to a
-# temporary folder, removed at the end). Prints one line per file, OK or FAIL with the
+# a few --bv kinds, and the bundled CesiumMan at the defaults and with --bv capsule (its GLB
+# skinned and animated, its MJCF a ragdoll), writing OUTDIR/<mesh>_<config>.{json,glb,xml}
+# (OUTDIR defaults to a temporary folder, removed at the end). Prints one line per file, OK or FAIL with the
 # reasons, and exits 1 if any failed.
 #
 # The clients are installed on first use, from the npm registry and PyPI only, into
@@ -91,6 +92,22 @@ for mesh in "$root"/assets/meshes/{bunny,spot,fourleg_2}.obj; do
             failed=1
         fi
     done
+done
+
+# A skinned character: the GLB with its skinned mesh and animation (--with-mesh), its
+# colliders under the joints; the MJCF a ragdoll of one body per bone.
+for entry in "default|" "capsule|--bv capsule"; do
+    tag=${entry%%|*} args=${entry#*|}
+    base="$out/CesiumMan_$tag"
+    rm -f "$base".{json,glb,xml}
+    # shellcheck disable=SC2086
+    if "$bvseg" segment "$root/assets/characters/CesiumMan.glb" -q $args --with-mesh \
+        -o "$base.json" -o "$base.glb" -o "$base.xml" >"$base.log" 2>&1; then
+        bases+=("$base")
+    else
+        echo "FAIL CesiumMan_$tag: bvseg segment $args exited $?: $(tail -n 3 "$base.log" | tr '\n' ' ')"
+        failed=1
+    fi
 done
 
 # --- checks -------------------------------------------------------------------------------

@@ -174,3 +174,83 @@ fn bad_skins_are_one_line_errors() {
         assert!(e.starts_with("t.gltf: ") && !e.contains('\n'), "{e}");
     }
 }
+
+/// Held-out characters, when `BVSEG_CHARACTERS` names a folder of `.glb` files (not in the
+/// repository: see docs/characters.md): at the defaults every part has a bone, at least 8
+/// bones are used when the skeleton has that many, every triangle is enclosed at rest and in
+/// every sampled pose, and every collider of the GLB hangs under a joint of a skin.
+#[test]
+fn held_out_characters_when_given() {
+    let Some(dir) = std::env::var_os("BVSEG_CHARACTERS") else {
+        return;
+    };
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "no .glb in {dir:?}");
+    for file in files {
+        let loaded = load(&file, &LoadOptions::default()).unwrap();
+        let name = file.display();
+        let rig = loaded.mesh.rig().expect("a skinned character");
+        let skin = rig.skin.as_ref().unwrap();
+        let seg = segment(&loaded.mesh, &Params::default()).unwrap();
+        let skeleton = seg.skeleton.as_ref().unwrap();
+        let bones: std::collections::BTreeSet<usize> =
+            seg.parts.iter().map(|p| p.bone.expect("a bone")).collect();
+        assert!(
+            bones.len() >= 8.min(skeleton.joints.len() - 1),
+            "{name}: {} bones",
+            bones.len()
+        );
+        for (t, tri) in loaded.mesh.triangles().iter().enumerate() {
+            let part = &seg.parts[seg.triangle_parts[t] as usize];
+            for &v in tri {
+                assert!(part.volume.contains(loaded.mesh.vertices()[v as usize]));
+            }
+        }
+        for pose in &skin.poses {
+            for (t, corners) in skin.corners.iter().enumerate() {
+                let part = &seg.parts[seg.triangle_parts[t] as usize];
+                let b = part.bone.unwrap();
+                let back = skeleton.joints[b].rest * pose.joints[b].inverse();
+                for &c in corners {
+                    let p = back.transform_point3(pose.vertices[c as usize]);
+                    assert!(
+                        part.volume.contains(p),
+                        "{name}: triangle {t} at {}",
+                        pose.time
+                    );
+                }
+            }
+        }
+        let glb = bvseg_io::export::to_glb_skinned(
+            &seg,
+            Some(&loaded.mesh),
+            loaded.skinning.as_deref().unwrap(),
+        );
+        let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+        let doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+        let nodes = doc["nodes"].as_array().unwrap();
+        let mut parent = std::collections::BTreeMap::new();
+        for (i, n) in nodes.iter().enumerate() {
+            for c in n["children"].as_array().into_iter().flatten() {
+                parent.insert(c.as_u64().unwrap() as usize, i);
+            }
+        }
+        let joints: std::collections::BTreeSet<usize> = doc["skins"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|s| s["joints"].as_array().unwrap().iter())
+            .map(|j| j.as_u64().unwrap() as usize)
+            .collect();
+        for (i, n) in nodes.iter().enumerate() {
+            if n["name"].as_str().is_some_and(|s| s.ends_with("_collider")) {
+                assert!(joints.contains(&parent[&i]), "{name}: node {i}");
+            }
+        }
+    }
+}

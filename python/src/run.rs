@@ -208,6 +208,7 @@ impl PySegmentation {
         let loaded = &self.mesh.get().loaded;
         let options = ExportOptions {
             mesh: with_mesh.then_some(&loaded.mesh),
+            skinning: loaded.skinning.as_deref(),
         };
         py.detach(|| write_output(&path, &self.seg, &options))
             .map_err(errors::output_io)

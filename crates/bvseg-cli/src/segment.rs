@@ -97,6 +97,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
 
     let options = ExportOptions {
         mesh: args.with_mesh.then_some(mesh),
+        skinning: loaded.skinning.as_deref(),
     };
     for out in &args.output {
         write_output(out, &seg, &options)?;

@@ -345,3 +345,45 @@ fn labels_follow_the_file_triangles() {
     assert_eq!(labels.iter().filter(|&&l| l == -1).count(), 1);
     assert!(labels.iter().all(|&l| (-1..2).contains(&l)));
 }
+
+/// A skinned character through the command line: the GLB carries the file's skin and walk
+/// (with `--with-mesh`, the mesh skinned), and the MJCF is a ragdoll with a free root.
+#[test]
+fn a_character_gets_a_skinned_glb_and_a_ragdoll() {
+    let dir = scratch("a_character_gets_a_skinned_glb_and_a_ragdoll");
+    let man = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/characters/CesiumMan.glb"
+    );
+    let o = bvseg(
+        &dir,
+        &[
+            "segment",
+            man,
+            "--samples",
+            "3000",
+            "-o",
+            "m.glb",
+            "-o",
+            "m.xml",
+            "--with-mesh",
+            "-q",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let glb = fs::read(dir.join("m.glb")).unwrap();
+    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    assert_eq!(doc["skins"][0]["joints"].as_array().unwrap().len(), 19);
+    assert_eq!(doc["animations"].as_array().unwrap().len(), 1);
+    let skinned = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "input_mesh")
+        .unwrap();
+    assert_eq!(skinned["skin"], 0);
+    let xml = fs::read_to_string(dir.join("m.xml")).unwrap();
+    assert_eq!(xml.matches("<freejoint").count(), 1);
+    assert!(xml.contains("type=\"ball\""));
+}

@@ -33,11 +33,13 @@ pub struct CharacterInfo {
 /// How one raw vertex moves.
 #[derive(Clone)]
 pub(crate) enum Influence {
-    /// Skinned: its local position, and up to four (skin joint matrix index, weight).
+    /// Skinned: its local position, up to four (skin joint matrix index, weight), and the
+    /// file's own JOINTS_0 and WEIGHTS_0 values, which the GLB writer carries over.
     Skinned {
         local: DVec3,
         skin: usize,
         joints: [(usize, f64); 4],
+        file: ([u16; 4], [f32; 4]),
     },
     /// Rigidly with a node (an unskinned mesh): its position in the node's frame.
     Rigid { local: DVec3, node: usize },
@@ -50,14 +52,15 @@ pub(crate) struct Nodes {
     order: Vec<usize>,
 }
 
-#[derive(Clone, Copy)]
-enum Local {
+/// A node's local transform as the file gives it, in f64.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Local {
     Matrix(DMat4),
     Trs(DVec3, DQuat, DVec3),
 }
 
 impl Local {
-    fn matrix(self) -> DMat4 {
+    pub(crate) fn matrix(self) -> DMat4 {
         match self {
             Local::Matrix(m) => m,
             Local::Trs(t, r, s) => DMat4::from_scale_rotation_translation(s, r, t),
@@ -66,7 +69,8 @@ impl Local {
 }
 
 impl Nodes {
-    pub(crate) fn new(doc: &gltf::Document, name: &str) -> Result<Self, IoError> {
+    /// The node tree of `doc`, with `rest` the nodes' local transforms ([`node_locals`]).
+    pub(crate) fn new(doc: &gltf::Document, rest: Vec<Local>, name: &str) -> Result<Self, IoError> {
         let n = doc.nodes().count();
         let mut parent = vec![None; n];
         for node in doc.nodes() {
@@ -77,23 +81,6 @@ impl Nodes {
                 parent[c.index()] = Some(node.index());
             }
         }
-        let rest = doc
-            .nodes()
-            .map(|node| match node.transform() {
-                gltf::scene::Transform::Matrix { matrix } => {
-                    Local::Matrix(DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))))
-                }
-                gltf::scene::Transform::Decomposed {
-                    translation,
-                    rotation,
-                    scale,
-                } => Local::Trs(
-                    DVec3::from_array(translation.map(f64::from)),
-                    unit(DQuat::from_array(rotation.map(f64::from))),
-                    DVec3::from_array(scale.map(f64::from)),
-                ),
-            })
-            .collect();
         // Parents before children: depth-first from the roots; a node on a cycle has no root.
         let mut children = vec![Vec::new(); n];
         for (c, p) in parent.iter().enumerate() {
@@ -137,6 +124,62 @@ fn unit(q: DQuat) -> DQuat {
     } else {
         DQuat::IDENTITY
     }
+}
+
+/// Every node's local transform, read from the JSON text in f64: the `gltf` crate reads
+/// numbers as f32, and exporters that print their f64 transforms in full (three.js) would
+/// otherwise put the rest pose a few 1e-8 away from where any f64 reader of the file puts it.
+/// Rotations are normalised.
+pub(crate) fn node_locals(json: &[u8], doc: &gltf::Document) -> Vec<Local> {
+    #[derive(serde::Deserialize)]
+    struct Root {
+        #[serde(default)]
+        nodes: Vec<Node>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Node {
+        matrix: Option<[f64; 16]>,
+        translation: Option<[f64; 3]>,
+        rotation: Option<[f64; 4]>,
+        scale: Option<[f64; 3]>,
+    }
+    let raw = serde_json::from_slice::<Root>(json)
+        .ok()
+        .filter(|r| r.nodes.len() == doc.nodes().count());
+    doc.nodes()
+        .map(|node| {
+            let (matrix, t, r, s) = match raw.as_ref().map(|r| &r.nodes[node.index()]) {
+                Some(n) => (n.matrix, n.translation, n.rotation, n.scale),
+                // The document parsed, so this cannot happen; the crate's f32 values then.
+                None => match node.transform() {
+                    gltf::scene::Transform::Matrix { matrix } => (
+                        Some(std::array::from_fn(|i| f64::from(matrix[i / 4][i % 4]))),
+                        None,
+                        None,
+                        None,
+                    ),
+                    gltf::scene::Transform::Decomposed {
+                        translation,
+                        rotation,
+                        scale,
+                    } => (
+                        None,
+                        Some(translation.map(f64::from)),
+                        Some(rotation.map(f64::from)),
+                        Some(scale.map(f64::from)),
+                    ),
+                },
+            };
+            match matrix {
+                Some(m) => Local::Matrix(DMat4::from_cols_array(&m)),
+                None => Local::Trs(
+                    DVec3::from_array(t.unwrap_or([0.0; 3])),
+                    unit(DQuat::from_array(r.unwrap_or([0.0, 0.0, 0.0, 1.0]))),
+                    DVec3::from_array(s.unwrap_or([1.0; 3])),
+                ),
+            }
+        })
+        .collect()
 }
 
 fn parse(name: &str, message: impl Into<String>) -> IoError {
@@ -248,9 +291,13 @@ pub(crate) fn skinned_influences(
     let mut out = Vec::with_capacity(n);
     for v in 0..n {
         let mut js = [(0usize, 0.0f64); 4];
+        let mut file = ([0u16; 4], [0f32; 4]);
         let mut sum = 0.0;
         for c in 0..4 {
             let (j, w) = (joints[4 * v + c] as usize, weights[4 * v + c]);
+            // An unused slot may name any joint; written back, it names the first.
+            file.0[c] = u16::try_from(j).ok().filter(|_| j < count).unwrap_or(0);
+            file.1[c] = w as f32;
             if w < 0.0 {
                 return Err(parse(
                     name,
@@ -286,33 +333,36 @@ pub(crate) fn skinned_influences(
             local: local[v],
             skin: skin.index(),
             joints: js,
+            file,
         });
     }
     Ok(out)
 }
 
-#[derive(Clone, Copy, PartialEq)]
-enum Path {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Path {
     T,
     R,
     S,
 }
 
-#[derive(Clone, Copy, PartialEq)]
-enum Interp {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Interp {
     Step,
     Linear,
     Cubic,
 }
 
-struct Channel {
-    node: usize,
-    path: Path,
-    interp: Interp,
-    times: Vec<f64>,
+/// One animation channel as read: its node's TRS path, keys and values.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Channel {
+    pub(crate) node: usize,
+    pub(crate) path: Path,
+    pub(crate) interp: Interp,
+    pub(crate) times: Vec<f64>,
     /// Per key one value (LINEAR, STEP) or in-tangent, value, out-tangent (CUBICSPLINE),
     /// each of 3 or 4 components padded to 4.
-    values: Vec<[f64; 4]>,
+    pub(crate) values: Vec<[f64; 4]>,
 }
 
 impl Channel {
@@ -355,6 +405,7 @@ impl Channel {
 }
 
 struct Animation {
+    name: Option<String>,
     channels: Vec<Channel>,
     keys: Vec<f64>,
 }
@@ -424,7 +475,11 @@ fn read_animations(
         let mut keys: Vec<f64> = keys.into_iter().map(f64::from_bits).collect();
         keys.sort_by(f64::total_cmp);
         if !channels.is_empty() {
-            out.push(Animation { channels, keys });
+            out.push(Animation {
+                name: anim.name().map(str::to_owned),
+                channels,
+                keys,
+            });
         }
     }
     Ok(out)
@@ -461,6 +516,8 @@ pub(crate) struct Character {
     /// The skeleton's joints' nodes, ascending.
     joint_nodes: Vec<usize>,
     rest_worlds: Vec<DMat4>,
+    /// [`Character::joint_matrices`] at rest.
+    rest_matrices: Vec<Vec<DMat4>>,
     pub(crate) influences: Vec<Influence>,
     animations: Vec<Animation>,
 }
@@ -469,13 +526,14 @@ impl Character {
     /// `None` for a document without skins: it is read as before, with no rig.
     pub(crate) fn new(
         doc: &gltf::Document,
+        rest: &[Local],
         buffers: &[Vec<u8>],
         name: &str,
     ) -> Result<Option<Self>, IoError> {
         if doc.skins().next().is_none() {
             return Ok(None);
         }
-        let nodes = Nodes::new(doc, name)?;
+        let nodes = Nodes::new(doc, rest.to_vec(), name)?;
         let mut skins = Vec::new();
         let mut joint_nodes = BTreeSet::new();
         for skin in doc.skins() {
@@ -516,38 +574,55 @@ impl Character {
         }
         let rest_worlds = nodes.worlds(&nodes.rest);
         let animations = read_animations(doc, buffers, name)?;
-        Ok(Some(Self {
+        let mut character = Self {
             nodes,
             skins,
             joint_nodes: joint_nodes.into_iter().collect(),
             rest_worlds,
+            rest_matrices: Vec::new(),
             influences: Vec::new(),
             animations,
-        }))
+        };
+        character.rest_matrices = character.joint_matrices(&character.rest_worlds);
+        Ok(Some(character))
     }
 
-    /// Where a vertex is when the nodes' world matrices are `worlds`.
-    fn place(&self, inf: &Influence, worlds: &[DMat4]) -> DVec3 {
+    /// Each skin's joint matrices (joint world times inverse bind matrix) when the nodes'
+    /// world matrices are `worlds`: computed once per pose, not once per vertex.
+    fn joint_matrices(&self, worlds: &[DMat4]) -> Vec<Vec<DMat4>> {
+        self.skins
+            .iter()
+            .map(|(nodes, ibm)| {
+                nodes
+                    .iter()
+                    .zip(ibm)
+                    .map(|(&n, m)| worlds[n] * *m)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Where a vertex is when the nodes' world matrices are `worlds` and the skins' joint
+    /// matrices `matrices` ([`Character::joint_matrices`]).
+    fn place(inf: &Influence, worlds: &[DMat4], matrices: &[Vec<DMat4>]) -> DVec3 {
         match *inf {
             Influence::Rigid { local, node } => worlds[node].transform_point3(local),
             Influence::Skinned {
                 local,
                 skin,
                 joints,
-            } => {
-                let (nodes, ibm) = &self.skins[skin];
-                joints
-                    .iter()
-                    .filter(|j| j.1 > 0.0)
-                    .map(|&(j, w)| (worlds[nodes[j]] * ibm[j]).transform_point3(local) * w)
-                    .sum()
-            }
+                ..
+            } => joints
+                .iter()
+                .filter(|j| j.1 > 0.0)
+                .map(|&(j, w)| matrices[skin][j].transform_point3(local) * w)
+                .sum(),
         }
     }
 
     /// The rest position of a vertex, recorded with its influence.
     pub(crate) fn add(&mut self, inf: Influence) -> DVec3 {
-        let p = self.place(&inf, &self.rest_worlds);
+        let p = Self::place(&inf, &self.rest_worlds, &self.rest_matrices);
         self.influences.push(inf);
         p
     }
@@ -677,6 +752,7 @@ impl Character {
                 let worlds = self
                     .nodes
                     .worlds(&locals_at(&self.nodes, &self.animations[a], t));
+                let matrices = self.joint_matrices(&worlds);
                 Pose {
                     animation: a,
                     time: t,
@@ -684,10 +760,176 @@ impl Character {
                     vertices: self
                         .influences
                         .iter()
-                        .map(|inf| self.place(inf, &worlds))
+                        .map(|inf| Self::place(inf, &worlds, &matrices))
                         .collect(),
                 }
             })
             .collect()
+    }
+}
+
+/// A skinned file's skins, skinning data and animations, carried from the reader to the GLB
+/// writer ([`crate::LoadedMesh::skinning`], [`crate::export::ExportOptions::skinning`]), so
+/// that the output's mesh moves with its joints as the input's did, and so do the colliders
+/// hanging under them. Everything is kept as the file has it (node transforms, inverse bind
+/// matrices, JOINTS_0 and WEIGHTS_0, keys), with node indices into [`Skinning`]'s own nodes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skinning {
+    /// Every skin joint, every node of an unskinned mesh that was read, and all their
+    /// ancestors, in the file's order.
+    pub(crate) nodes: Vec<SkinNode>,
+    /// The skins (equal ones of the file merged), then, when unskinned meshes were read, one
+    /// more whose joints are their nodes (identity inverse bind matrices).
+    pub(crate) skins: Vec<OutSkin>,
+    /// Per vertex the reader produced (the indices of [`bvseg_core::Skin::corners`]).
+    pub(crate) vertices: Vec<SkinnedVertex>,
+    /// The animations, with only their channels that move [`Skinning::nodes`].
+    pub(crate) animations: Vec<OutAnimation>,
+}
+
+/// One node of a [`Skinning`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct SkinNode {
+    /// Its index in the file: what the core's [`bvseg_core::Joint::node`] names.
+    pub(crate) file_index: usize,
+    pub(crate) name: Option<String>,
+    /// Index into [`Skinning::nodes`].
+    pub(crate) parent: Option<usize>,
+    pub(crate) local: Local,
+}
+
+/// One skin of a [`Skinning`]: joints as indices into [`Skinning::nodes`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct OutSkin {
+    pub(crate) joints: Vec<usize>,
+    pub(crate) inverse_bind: Vec<DMat4>,
+}
+
+/// One vertex of a [`Skinning`]: its position in its mesh's frame (as the file has it, in
+/// bind space), its skin, and JOINTS_0 (into that skin's joints) and WEIGHTS_0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SkinnedVertex {
+    pub(crate) skin: usize,
+    pub(crate) position: DVec3,
+    pub(crate) joints: [u16; 4],
+    pub(crate) weights: [f32; 4],
+}
+
+/// One animation of a [`Skinning`], channels on [`Skinning::nodes`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct OutAnimation {
+    pub(crate) name: Option<String>,
+    pub(crate) channels: Vec<Channel>,
+}
+
+impl Skinning {
+    /// The index into [`Skinning::nodes`] of the file's node `file_index`.
+    pub(crate) fn node_of(&self, file_index: usize) -> Option<usize> {
+        self.nodes
+            .binary_search_by_key(&file_index, |n| n.file_index)
+            .ok()
+    }
+}
+
+impl Character {
+    /// What the GLB writer needs to write the mesh skinned and the animations (see
+    /// [`Skinning`]).
+    pub(crate) fn skinning(&self, doc: &gltf::Document) -> Skinning {
+        let n = self.nodes.parent.len();
+        let mut rigid_nodes = BTreeSet::new();
+        for inf in &self.influences {
+            if let Influence::Rigid { node, .. } = *inf {
+                rigid_nodes.insert(node);
+            }
+        }
+        let mut keep = vec![false; n];
+        for &start in self.skins.iter().flat_map(|s| &s.0).chain(&rigid_nodes) {
+            let mut at = Some(start);
+            while let Some(i) = at.filter(|&i| !keep[i]) {
+                keep[i] = true;
+                at = self.nodes.parent[i];
+            }
+        }
+        let mut index = vec![usize::MAX; n];
+        let mut nodes = Vec::new();
+        for (i, node) in doc.nodes().enumerate().filter(|(i, _)| keep[*i]) {
+            index[i] = nodes.len();
+            nodes.push(SkinNode {
+                file_index: i,
+                name: node.name().map(str::to_owned),
+                parent: self.nodes.parent[i].map(|p| index[p]),
+                local: self.nodes.rest[i],
+            });
+        }
+        // A parent may come after its child in the file: fill parents in a second pass.
+        for node in &mut nodes {
+            node.parent = self.nodes.parent[node.file_index].map(|p| index[p]);
+        }
+        let mut skins: Vec<OutSkin> = Vec::new();
+        let out_skin: Vec<usize> = self
+            .skins
+            .iter()
+            .map(|(joints, ibm)| {
+                let skin = OutSkin {
+                    joints: joints.iter().map(|&j| index[j]).collect(),
+                    inverse_bind: ibm.clone(),
+                };
+                skins.iter().position(|s| *s == skin).unwrap_or_else(|| {
+                    skins.push(skin);
+                    skins.len() - 1
+                })
+            })
+            .collect();
+        let rigid: Vec<usize> = rigid_nodes.into_iter().collect();
+        let rigid_skin = skins.len();
+        if !rigid.is_empty() {
+            skins.push(OutSkin {
+                joints: rigid.iter().map(|&j| index[j]).collect(),
+                inverse_bind: vec![DMat4::IDENTITY; rigid.len()],
+            });
+        }
+        let vertices = self
+            .influences
+            .iter()
+            .map(|inf| match *inf {
+                Influence::Skinned {
+                    local, skin, file, ..
+                } => SkinnedVertex {
+                    skin: out_skin[skin],
+                    position: local,
+                    joints: file.0,
+                    weights: file.1,
+                },
+                Influence::Rigid { local, node } => SkinnedVertex {
+                    skin: rigid_skin,
+                    position: local,
+                    joints: [rigid.binary_search(&node).unwrap_or(0) as u16, 0, 0, 0],
+                    weights: [1.0, 0.0, 0.0, 0.0],
+                },
+            })
+            .collect();
+        let animations = self
+            .animations
+            .iter()
+            .map(|a| OutAnimation {
+                name: a.name.clone(),
+                channels: a
+                    .channels
+                    .iter()
+                    .filter(|c| keep[c.node])
+                    .map(|c| Channel {
+                        node: index[c.node],
+                        ..c.clone()
+                    })
+                    .collect(),
+            })
+            .filter(|a| !a.channels.is_empty())
+            .collect();
+        Skinning {
+            nodes,
+            skins,
+            vertices,
+            animations,
+        }
     }
 }

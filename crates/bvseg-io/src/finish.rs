@@ -48,6 +48,10 @@ pub struct LoadedMesh {
     /// What a skinned glTF file holds (joints, skins, animations, sampled poses); `None`
     /// for any other file. The mesh then carries its rig ([`bvseg_core::Mesh::rig`]).
     pub character: Option<crate::CharacterInfo>,
+    /// A skinned glTF file's skins, skinning data and animations, for the GLB writer to
+    /// write the mesh skinned and animated ([`crate::export::ExportOptions::skinning`]);
+    /// `None` for any other file.
+    pub skinning: Option<std::sync::Arc<crate::Skinning>>,
 }
 
 impl LoadedMesh {
@@ -209,6 +213,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
         report,
         dropped,
         character: None,
+        skinning: None,
     })
 }
 

@@ -7,7 +7,7 @@
 //! and buffer before a single element is read. Allocations are then bounded by the file.
 use std::path::Path;
 
-use glam::{DMat4, DQuat, DVec3};
+use glam::{DMat4, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
@@ -64,7 +64,8 @@ pub(crate) fn read_gltf(
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| err(name, "the document has no scene"))?;
-    let mut character = crate::character::Character::new(&doc, &buffers, name)?;
+    let locals = crate::character::node_locals(json, &doc);
+    let mut character = crate::character::Character::new(&doc, &locals, &buffers, name)?;
     let mut raw = RawMesh::default();
     let mut found = mesh.is_none();
     // Depth-first over the node tree with world matrices in f64.
@@ -85,7 +86,7 @@ pub(crate) fn read_gltf(
                 ),
             ));
         }
-        let world = parent * local_matrix(&node);
+        let world = parent * locals[node.index()].matrix();
         if let Some(m) = node.mesh() {
             if mesh.is_none_or(|want| m.name() == Some(want)) {
                 found = true;
@@ -142,6 +143,7 @@ pub(crate) fn read_gltf(
         .with_rig(rig)
         .map_err(|e| err(name, e.to_string()))?;
     loaded.character = Some(info);
+    loaded.skinning = Some(std::sync::Arc::new(character.skinning(&doc)));
     Ok(loaded)
 }
 
@@ -372,32 +374,6 @@ fn percent_decode(s: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).into_owned()
-}
-
-fn local_matrix(node: &gltf::Node) -> DMat4 {
-    match node.transform() {
-        gltf::scene::Transform::Matrix { matrix } => {
-            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
-        }
-        gltf::scene::Transform::Decomposed {
-            translation: t,
-            rotation: r,
-            scale: s,
-        } => {
-            let q = DQuat::from_xyzw(r[0] as f64, r[1] as f64, r[2] as f64, r[3] as f64);
-            // Exporters write quaternions in f32 that are slightly off unit length.
-            let q = if q.length_squared() > 0.0 {
-                q.normalize()
-            } else {
-                DQuat::IDENTITY
-            };
-            DMat4::from_scale_rotation_translation(
-                DVec3::from_array(s.map(f64::from)),
-                q,
-                DVec3::from_array(t.map(f64::from)),
-            )
-        }
-    }
 }
 
 /// The bytes of accessor `acc`'s elements: (data, offset of the first element, stride),

@@ -29,7 +29,7 @@ pub use volumes_read::{
 };
 
 pub use atomic::write_atomic;
-pub use character::CharacterInfo;
+pub use character::{CharacterInfo, Skinning};
 pub use error::IoError;
 pub use finish::{load_arrays, LoadStats, LoadedMesh, MAX_TRIANGLES};
 pub use json::{schema_and_kind, to_json_string, write_json, GENERATOR, SCHEMA, SCHEMA_V2};

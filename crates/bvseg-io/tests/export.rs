@@ -372,3 +372,263 @@ fn write_output_picks_the_format_and_refuses_others() {
     let with = bvseg_io::export::to_labels_with_dropped(&seg, &[0, 2, 4]);
     assert_eq!(with, "-1\n0\n-1\n1\n-1\n");
 }
+
+const CESIUM_MAN: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../assets/characters/CesiumMan.glb"
+);
+
+/// World matrices of a document's nodes from their (f32) transforms.
+fn worlds(doc: &gltf::Document) -> (Vec<glam::DMat4>, Vec<Option<usize>>) {
+    let n = doc.nodes().count();
+    let mut parent = vec![None; n];
+    for node in doc.nodes() {
+        for c in node.children() {
+            parent[c.index()] = Some(node.index());
+        }
+    }
+    let local: Vec<glam::DMat4> = doc
+        .nodes()
+        .map(|n| glam::Mat4::from_cols_array_2d(&n.transform().matrix()).as_dmat4())
+        .collect();
+    let world = (0..n)
+        .map(|mut i| {
+            let mut m = local[i];
+            while let Some(p) = parent[i] {
+                m = local[p] * m;
+                i = p;
+            }
+            m
+        })
+        .collect();
+    (world, parent)
+}
+
+/// CesiumMan's GLB with its mesh: the mesh is skinned by the file's skin (JOINTS_0,
+/// WEIGHTS_0, inverse bind matrices) to the output's joint nodes, which its walk animates,
+/// and every collider hangs under a joint, placed where its volume is at rest.
+#[test]
+fn a_skinned_character_is_written_skinned_and_animated() {
+    let loaded = bvseg_io::load(CESIUM_MAN, &bvseg_io::LoadOptions::default()).unwrap();
+    let skinning = loaded.skinning.as_deref().expect("a skinned file");
+    let params = bvseg_core::Params {
+        samples: 3000,
+        ..bvseg_core::Params::default()
+    };
+    let seg = bvseg_core::segment(&loaded.mesh, &params).unwrap();
+    let bytes = bvseg_io::export::to_glb_skinned(&seg, Some(&loaded.mesh), skinning);
+    assert_eq!(
+        bytes,
+        bvseg_io::export::to_glb_skinned(&seg, Some(&loaded.mesh), skinning),
+        "deterministic"
+    );
+    let g = gltf::Gltf::from_slice(&bytes).unwrap();
+    let blob = g.blob.as_deref().unwrap();
+    let input = gltf::Gltf::open(CESIUM_MAN).unwrap();
+
+    // One skin of the file's 19 joints, and the walk's channels, each on one of its joints.
+    let skins: Vec<_> = g.skins().collect();
+    assert_eq!(skins.len(), 1);
+    let joints: std::collections::BTreeSet<usize> = skins[0].joints().map(|j| j.index()).collect();
+    assert_eq!(joints.len(), 19);
+    let ibm: Vec<[[f32; 4]; 4]> = skins[0]
+        .reader(|_| Some(blob))
+        .read_inverse_bind_matrices()
+        .unwrap()
+        .collect();
+    assert_eq!(ibm.len(), 19);
+    let file_channels: usize = input.animations().map(|a| a.channels().count()).sum();
+    let channels: Vec<_> = g.animations().flat_map(|a| a.channels()).collect();
+    assert_eq!(g.animations().count(), input.animations().count());
+    assert_eq!(channels.len(), file_channels);
+    assert!(channels
+        .iter()
+        .all(|c| joints.contains(&c.target().node().index())));
+
+    // At rest the skinned mesh is the loaded mesh, corner by corner.
+    let (world, parent) = worlds(&g.document);
+    let node = g
+        .nodes()
+        .find(|n| n.skin().is_some())
+        .expect("a skinned mesh node");
+    assert_eq!(node.name(), Some("input_mesh"));
+    let prim = node.mesh().unwrap().primitives().next().unwrap();
+    let r = prim.reader(|_| Some(blob));
+    let pos: Vec<[f32; 3]> = r.read_positions().unwrap().collect();
+    let js: Vec<[u16; 4]> = r.read_joints(0).unwrap().into_u16().collect();
+    let ws: Vec<[f32; 4]> = r.read_weights(0).unwrap().into_f32().collect();
+    let skin_joints: Vec<usize> = skins[0].joints().map(|j| j.index()).collect();
+    let m = &loaded.mesh;
+    assert_eq!(pos.len(), 3 * m.triangles().len());
+    for (k, p) in pos.iter().enumerate() {
+        let p = DVec3::from_array(p.map(f64::from));
+        let at: DVec3 = (0..4)
+            .map(|c| {
+                let j = js[k][c] as usize;
+                let ibm = glam::Mat4::from_cols_array_2d(&ibm[j]).as_dmat4();
+                (world[skin_joints[j]] * ibm).transform_point3(p) * f64::from(ws[k][c])
+            })
+            .sum();
+        let want = m.vertices()[m.triangles()[k / 3][k % 3] as usize];
+        assert!((at - want).length() < 1e-5, "corner {k}: {at} vs {want}");
+    }
+
+    // Every collider hangs under a joint, and sits at rest where its volume is.
+    let mut colliders = 0;
+    for n in g.nodes() {
+        if !n.name().is_some_and(|s| s.ends_with("_collider")) {
+            continue;
+        }
+        colliders += 1;
+        let p = parent[n.index()].unwrap();
+        assert!(joints.contains(&p), "{:?} hangs under node {p}", n.name());
+        let i: usize = n.name().unwrap()["part_".len()..]
+            .trim_end_matches("_collider")
+            .parse()
+            .unwrap();
+        let v = &seg.parts[i].volume;
+        assert!((world[n.index()].transform_point3(DVec3::ZERO) - v.center).length() < 1e-4);
+    }
+    assert_eq!(colliders, seg.parts.len());
+}
+
+/// Parses an MJCF attribute of numbers.
+fn nums(node: roxmltree::Node, attr: &str) -> Vec<f64> {
+    node.attribute(attr)
+        .unwrap_or("")
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect()
+}
+
+/// A three-joint skeleton (turned and scaled rest frames) with parts bound to two of its
+/// bones: the MJCF is a ragdoll, a body per joint nested like the joints, a free joint at the
+/// root and a ball joint where a bone carries volumes, and composing the bodies' frames puts
+/// every geom where its volume is in the rest pose.
+#[test]
+fn mjcf_of_a_character_is_a_ragdoll_of_its_bones() {
+    use bvseg_core::{Joint, Skeleton};
+    use glam::DMat4;
+    let frame = |euler: (f64, f64, f64), scale: f64, at: DVec3| {
+        DMat4::from_scale_rotation_translation(
+            DVec3::splat(scale),
+            DQuat::from_euler(EulerRot::XYZ, euler.0, euler.1, euler.2),
+            at,
+        )
+    };
+    let joint = |name: &str, parent, rest| Joint {
+        name: name.into(),
+        parent,
+        rest,
+        node: None,
+    };
+    let mut seg = seg();
+    seg.skeleton = Some(Skeleton {
+        joints: vec![
+            joint(
+                "hip",
+                None,
+                frame((0.3, 0.1, -0.2), 100.0, DVec3::new(0.0, 1.0, 0.0)),
+            ),
+            joint(
+                "knee",
+                Some(0),
+                frame((-0.4, 0.6, 0.2), 100.0, DVec3::new(0.2, 0.5, 0.1)),
+            ),
+            joint(
+                "foot",
+                Some(1),
+                frame((0.1, 0.2, 0.3), 100.0, DVec3::new(0.3, 0.0, 0.4)),
+            ),
+        ],
+    });
+    let bones = [0, 1, 1, 0, 0, 1];
+    for (p, &b) in seg.parts.iter_mut().zip(&bones) {
+        p.bone = Some(b);
+    }
+    let text = to_mjcf(&seg, "walker");
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let bodies: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("body"))
+        .collect();
+    let names: Vec<_> = bodies
+        .iter()
+        .map(|b| b.attribute("name").unwrap())
+        .collect();
+    assert_eq!(names, ["hip", "knee", "foot"]);
+    // Nested like the joints.
+    assert_eq!(bodies[1].parent(), Some(bodies[0]));
+    assert_eq!(bodies[2].parent(), Some(bodies[1]));
+    let joint_of = |b: &roxmltree::Node| {
+        b.children()
+            .find(|c| c.has_tag_name("joint") || c.has_tag_name("freejoint"))
+            .map(|j| {
+                (
+                    j.tag_name().name().to_owned(),
+                    j.attribute("type").map(str::to_owned),
+                )
+            })
+    };
+    assert_eq!(joint_of(&bodies[0]), Some(("freejoint".into(), None)));
+    assert_eq!(
+        joint_of(&bodies[1]),
+        Some(("joint".into(), Some("ball".into())))
+    );
+    // The foot carries no volume: welded to the knee.
+    assert_eq!(joint_of(&bodies[2]), None);
+
+    // Each geom, composed through its bodies' frames, is its volume at rest.
+    let local = |n: roxmltree::Node| {
+        let p = nums(n, "pos");
+        let q = nums(n, "quat");
+        let t = if p.is_empty() {
+            DVec3::ZERO
+        } else {
+            DVec3::new(p[0], p[1], p[2])
+        };
+        let r = if q.is_empty() {
+            DQuat::IDENTITY
+        } else {
+            DQuat::from_xyzw(q[1], q[2], q[3], q[0])
+        };
+        glam::DAffine3::from_rotation_translation(r, t)
+    };
+    let mut seen = 0;
+    for g in doc.descendants().filter(|n| n.has_tag_name("geom")) {
+        let i: usize = g.attribute("name").unwrap()["part_".len()..]
+            .parse()
+            .unwrap();
+        let body = g.parent().unwrap();
+        assert_eq!(body.attribute("name"), Some(names[bones[i]]));
+        let mut world = local(g);
+        let mut at = Some(body);
+        while let Some(b) = at.filter(|b| b.has_tag_name("body")) {
+            world = local(b) * world;
+            at = b.parent();
+        }
+        let v = &seg.parts[i].volume;
+        if v.shape == Shape::Hull {
+            let name = g.attribute("mesh").unwrap();
+            let mesh = doc
+                .descendants()
+                .find(|n| n.has_tag_name("mesh") && n.attribute("name") == Some(name))
+                .unwrap();
+            let pts: Vec<DVec3> = nums(mesh, "vertex")
+                .chunks(3)
+                .map(|c| world.transform_point3(DVec3::new(c[0], c[1], c[2])))
+                .collect();
+            for p in v.hull_points() {
+                assert!(pts.iter().any(|q| (*q - p).length() < 1e-9), "part {i}");
+            }
+        } else {
+            assert!((world.translation - v.center).length() < 1e-9, "part {i}");
+            // The geom's Z is the capsule's or cylinder's axis, else its third axis.
+            let z = world.matrix3.z_axis;
+            assert!(z.dot(v.axes.z_axis).abs() > 1.0 - 1e-9, "part {i}");
+        }
+        assert_eq!(g.attribute("conaffinity"), Some("0"));
+        seen += 1;
+    }
+    assert_eq!(seen, seg.parts.len());
+}

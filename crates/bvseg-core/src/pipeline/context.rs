@@ -27,6 +27,9 @@ pub(crate) struct Context {
     /// The samples' votes for the bones of the mesh's rig, when it has a skeleton: every part
     /// is then bound to a bone (see [`crate::skeleton::bones`]).
     pub votes: Option<Votes>,
+    /// Each sample's bone by its skin, for the seeds (see [`crate::skeleton::seeds`]); empty
+    /// unless the skin's skeleton seeds the start.
+    pub seed_bones: Vec<Option<usize>>,
 }
 
 impl Context {
@@ -59,7 +62,13 @@ impl Context {
                 r.skeleton.joints.len(),
             )
         });
+        let skinned = rig.is_some_and(|r| r.skin.is_some());
+        let seed_bones = match (&votes, params.skeleton) {
+            (Some(v), SkeletonMode::Rig) if skinned => v.skin_bones(),
+            _ => Vec::new(),
+        };
         Self {
+            seed_bones,
             diagonal: (hi - lo).length(),
             mesh: mesh.clone(),
             solid,

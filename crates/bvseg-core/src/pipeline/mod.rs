@@ -235,8 +235,13 @@ impl Segmenter {
     fn start(&mut self) -> Step {
         let p = &self.ctx.params;
         let seeded = match p.k {
-            None => seeded_partition(&self.ctx.solid, &self.ctx.seeds, p.max_sweeps)
-                .filter(|part| part.k() <= p.max_k),
+            None => seeded_partition(
+                &self.ctx.solid,
+                &self.ctx.seeds,
+                &self.ctx.seed_bones,
+                p.max_sweeps,
+            )
+            .filter(|part| part.k() <= p.max_k),
             Some(_) => None,
         };
         let part = seeded.unwrap_or_else(|| {

@@ -105,4 +105,21 @@ impl Votes {
             })
             .collect()
     }
+
+    /// Each sample's bone by its skin votes alone: the bone with most weight among the
+    /// triangles it holds, `None` for a sample that holds none.
+    pub fn skin_bones(&self) -> Vec<Option<usize>> {
+        (0..self.offsets.len() - 1)
+            .map(|s| {
+                let (a, b) = (self.offsets[s] as usize, self.offsets[s + 1] as usize);
+                let mut best: Option<(f64, usize)> = None;
+                for &(j, w) in &self.votes[a..b] {
+                    if w > LINK_VOTE && best.is_none_or(|(bw, _)| w > bw) {
+                        best = Some((w, j as usize));
+                    }
+                }
+                best.map(|b| b.1)
+            })
+            .collect()
+    }
 }

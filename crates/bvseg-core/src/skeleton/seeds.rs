@@ -16,11 +16,28 @@ const MIN_SAMPLES: usize = 8;
 /// The start seeded by `links`, optimised with up to `max_sweeps` Lloyd sweeps and the
 /// boundary polish; `None` when no link is nearest to enough samples (a tiny solid), so
 /// that the caller falls back to the unseeded start.
-pub fn seeded_partition(solid: &Solid, links: &[Link], max_sweeps: usize) -> Option<Partition> {
+///
+/// `bones`, when not empty, gives a sample the bone its skin moves it with: it then goes to
+/// the nearest link of that bone, so that a part starts on one bone's skin, whose volume stays
+/// small in every pose, where the nearest link may be another bone's (a plate of a robot's
+/// shoulder nearer the arm's link than its own).
+pub fn seeded_partition(
+    solid: &Solid,
+    links: &[Link],
+    bones: &[Option<usize>],
+    max_sweeps: usize,
+) -> Option<Partition> {
     if links.is_empty() || solid.is_empty() {
         return None;
     }
-    let nearest_of: Vec<usize> = crate::parallel::map(&solid.q, |&q| nearest(links, q));
+    let samples: Vec<usize> = (0..solid.q.len()).collect();
+    let nearest_of: Vec<usize> = crate::parallel::map(&samples, |&s| {
+        let q = solid.q[s];
+        match bones.get(s).copied().flatten() {
+            Some(b) => nearest_of_bone(links, b, q).unwrap_or_else(|| nearest(links, q)),
+            None => nearest(links, q),
+        }
+    });
     let mut count = vec![0usize; links.len()];
     for &l in &nearest_of {
         count[l] += 1;
@@ -53,6 +70,18 @@ pub fn seeded_partition(solid: &Solid, links: &[Link], max_sweeps: usize) -> Opt
     drop_empty_parts(&mut part);
     optimize(solid, &mut part, None, None, max_sweeps);
     Some(part)
+}
+
+/// The index into `links` of the link of `bone` nearest `q`, if it has one.
+fn nearest_of_bone(links: &[Link], bone: usize, q: glam::DVec3) -> Option<usize> {
+    let mut best: Option<(f64, usize)> = None;
+    for (i, l) in links.iter().enumerate().filter(|(_, l)| l.bone == bone) {
+        let d = l.dist2(q);
+        if best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, i));
+        }
+    }
+    best.map(|b| b.1)
 }
 
 #[cfg(test)]
@@ -91,7 +120,7 @@ mod tests {
                 b: to_q(DVec3::new(0.0, 2.8, 0.0)),
             },
         ];
-        let part = seeded_partition(&solid, &links, 20).unwrap();
+        let part = seeded_partition(&solid, &links, &[], 20).unwrap();
         assert_eq!(part.k(), 2);
         assert!(is_connected(&solid.grid, &part.labels, &solid.components));
         // Far along each arm, every sample is in that arm's part.
@@ -106,12 +135,30 @@ mod tests {
         let far_x = solid.grid.points.iter().position(|p| p.x > 2.0).unwrap();
         let far_y = solid.grid.points.iter().position(|p| p.y > 2.0).unwrap();
         assert_ne!(part.labels[far_x], part.labels[far_y]);
+        // Samples whose skin moves them all with the first arm's bone start on its link: the
+        // other link keeps no samples, and one part is left.
+        let links = [
+            links[0],
+            Link {
+                bone: 1,
+                ..links[1]
+            },
+        ];
+        let bones = vec![Some(0); solid.len()];
+        assert_eq!(
+            seeded_partition(&solid, &links, &bones, 20).map(|p| p.k()),
+            Some(1)
+        );
+        assert_eq!(
+            seeded_partition(&solid, &links, &[], 20).map(|p| p.k()),
+            Some(2)
+        );
         // A skeleton far outside the solid seeds nothing.
         let away = [Link {
             bone: 0,
             a: to_q(DVec3::splat(100.0)),
             b: to_q(DVec3::splat(101.0)),
         }];
-        assert!(seeded_partition(&solid, &away, 20).is_some_and(|p| p.k() == 1));
+        assert!(seeded_partition(&solid, &away, &[], 20).is_some_and(|p| p.k() == 1));
     }
 }

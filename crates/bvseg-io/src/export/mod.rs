@@ -14,7 +14,7 @@ use bvseg_core::{Mesh, Segmentation};
 
 use crate::{write_atomic, IoError};
 
-pub use glb::to_glb;
+pub use glb::{to_glb, to_glb_skinned};
 pub use mjcf::to_mjcf;
 pub use obj::to_obj;
 pub use proxy::{enclosing_points, part_color, volume_rotation, y_up_rotation};
@@ -72,6 +72,10 @@ pub struct ExportOptions<'a> {
     /// GLB: also the input mesh, coloured by part (its triangles must be the ones the
     /// segmentation labelled).
     pub mesh: Option<&'a Mesh>,
+    /// GLB: a skinned file's skins and animations ([`crate::LoadedMesh::skinning`]): the
+    /// joints are then the file's nodes, animated as in the file, and `mesh` is written
+    /// skinned ([`to_glb_skinned`]).
+    pub skinning: Option<&'a crate::Skinning>,
 }
 
 /// Writes `seg` to `path` in the format its extension names, atomically.
@@ -88,7 +92,10 @@ pub fn write_output(
     let path = path.as_ref();
     let bytes = match OutputFormat::from_path(path)? {
         OutputFormat::Json => return crate::write_json(path, seg),
-        OutputFormat::Glb => to_glb(seg, options.mesh),
+        OutputFormat::Glb => match options.skinning {
+            Some(s) => to_glb_skinned(seg, options.mesh, s),
+            None => to_glb(seg, options.mesh),
+        },
         OutputFormat::Mjcf => {
             let model = path
                 .file_stem()
