@@ -355,6 +355,8 @@ impl Channel {
 }
 
 struct Animation {
+    /// The glTF animation's name, or `animation N` (its index in the file) without one.
+    name: String,
     channels: Vec<Channel>,
     keys: Vec<f64>,
 }
@@ -424,7 +426,14 @@ fn read_animations(
         let mut keys: Vec<f64> = keys.into_iter().map(f64::from_bits).collect();
         keys.sort_by(f64::total_cmp);
         if !channels.is_empty() {
-            out.push(Animation { channels, keys });
+            let name = anim
+                .name()
+                .map_or_else(|| format!("animation {}", anim.index()), str::to_owned);
+            out.push(Animation {
+                name,
+                channels,
+                keys,
+            });
         }
     }
     Ok(out)
@@ -649,6 +658,12 @@ impl Character {
             }),
         };
         (rig, info)
+    }
+
+    /// The animations' names, in the order [`Pose::animation`] numbers them (animations
+    /// with no transform channel are left out, as they pose nothing).
+    pub(crate) fn animation_names(&self) -> Vec<String> {
+        self.animations.iter().map(|a| a.name.clone()).collect()
     }
 
     /// The sampled poses: every key and the midpoints between keys, thinned evenly when

@@ -48,6 +48,10 @@ pub struct LoadedMesh {
     /// What a skinned glTF file holds (joints, skins, animations, sampled poses); `None`
     /// for any other file. The mesh then carries its rig ([`bvseg_core::Mesh::rig`]).
     pub character: Option<crate::CharacterInfo>,
+    /// The names of a skinned file's animations, indexed by [`bvseg_core::Pose::animation`]
+    /// (a glTF animation without a name is called `animation N`, N its index in the file);
+    /// empty for any other file.
+    pub animations: Vec<String>,
 }
 
 impl LoadedMesh {
@@ -209,6 +213,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
         report,
         dropped,
         character: None,
+        animations: Vec::new(),
     })
 }
 

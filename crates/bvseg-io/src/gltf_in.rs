@@ -142,6 +142,7 @@ pub(crate) fn read_gltf(
         .with_rig(rig)
         .map_err(|e| err(name, e.to_string()))?;
     loaded.character = Some(info);
+    loaded.animations = character.animation_names();
     Ok(loaded)
 }
 
