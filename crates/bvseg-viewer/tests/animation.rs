@@ -184,7 +184,7 @@ fn cesium_man_walks_and_its_volumes_walk_with_it() {
     h.get_by_label("Open").click();
     h.run_steps(2);
     assert_eq!(h.state().mesh_name(), Some("CesiumMan.glb"));
-    h.get_by_label("19 joints · 1 animations · 95 poses");
+    h.get_by_label("19 joints · 1 animation · 95 poses");
     // Its one animation has no name in the file.
     h.get_by_label("animation 0");
     h.get_by_label("rest pose (as loaded)");

@@ -469,11 +469,15 @@ impl ViewerApp {
                     if let Some(rig) = m.mesh.rig() {
                         let poses = rig.skin.as_ref().map_or(0, |s| s.poses.len());
                         let animations = self.player.as_ref().map_or(0, |p| p.clips().len());
+                        let s = |n: usize| if n == 1 { "" } else { "s" };
+                        let joints = rig.skeleton.joints.len();
                         row(
                             "Rig",
                             format!(
-                                "{} joints · {animations} animations · {poses} poses",
-                                rig.skeleton.joints.len()
+                                "{joints} joint{} · {animations} animation{} · {poses} pose{}",
+                                s(joints),
+                                s(animations),
+                                s(poses)
                             ),
                         );
                     }
