@@ -15,6 +15,8 @@ fn cesium_man_volumes_follow_its_walk() {
     let loaded = load(CESIUM_MAN, &LoadOptions::default()).unwrap();
     let info = loaded.character.expect("a skinned file");
     assert_eq!((info.skins, info.joints, info.animations), (1, 19, 1));
+    // Its walk has no name in the file: named by its index.
+    assert_eq!(loaded.animations, ["animation 0"]);
     let rig = loaded.mesh.rig().expect("the rig is attached");
     let skin = rig.skin.as_ref().unwrap();
     assert_eq!(skin.poses.len(), info.poses);

@@ -386,6 +386,65 @@ for (const [name, bytes] of [['brick.obj', brickObj], ['brick.glb', brickGlb], [
   });
 }
 
+/** The share of pixels of rectangle `r` that differ clearly between two decoded screenshots. */
+function changedShare(a, b, [x0, y0, w, h]) {
+  let n = 0, changed = 0;
+  for (let y = Math.max(0, Math.floor(y0)); y < Math.min(a.height, y0 + h); y++) {
+    for (let x = Math.max(0, Math.floor(x0)); x < Math.min(a.width, x0 + w); x++) {
+      const i = (y * a.width + x) * 4;
+      n++;
+      if ([0, 1, 2].some((c) => Math.abs(a.data[i + c] - b.data[i + c]) > 30)) changed++;
+    }
+  }
+  return changed / n;
+}
+
+test('a character opened through the file dialog walks in the page with its volumes', async () => {
+  const glb = join(here, '..', '..', 'assets', 'characters', 'CesiumMan.glb');
+  const page = await context.newPage();
+  await page.goto(`${base}/index.html`);
+  await page.waitForFunction(() => window.bvseg && window.bvseg.widgetRect('Mesh'), null, {
+    timeout: 60_000,
+  });
+  const click = (label) => clickWidget(page, label);
+  await click('Mesh');
+  const chooser = page.waitForEvent('filechooser', { timeout: 10_000 });
+  await click('Open file…');
+  await (await chooser).setFiles(glb);
+  // A mesh with an animation gets the animation controls.
+  await page.waitForFunction(() => window.bvseg.widgetRect('Play'), null, { timeout: 30_000 });
+  await click('Run');
+  await page.waitForFunction(
+    () => document.title.startsWith('bvseg: done') || document.title.startsWith('bvseg: error'),
+    null,
+    { timeout: TIMEOUT_MS, polling: 100 },
+  );
+  assert.ok((await page.title()).startsWith('bvseg: done'), await page.title());
+  const r = JSON.parse(await page.locator('#bvseg-result').textContent());
+  assert.equal(r.mesh, 'CesiumMan.glb');
+  assert.ok(r.k >= 2, `k = ${r.k}`);
+  const shot = async () => decodePng(await page.screenshot());
+  const rest = await shot();
+  await click('Play');
+  await page.waitForTimeout(1000);
+  const walking = await shot();
+  await click('Pause');
+  const paused = await shot();
+  await page.waitForTimeout(500);
+  const still = await shot();
+  mkdirSync(shots, { recursive: true });
+  writeFileSync(join(shots, 'CesiumMan-walking.png'), await page.screenshot());
+  const moved = changedShare(rest, walking, r.view);
+  const drift = changedShare(paused, still, r.view);
+  console.log(
+    `# CesiumMan.glb: k=${r.k}, run ${r.time_s.toFixed(2)} s; after a second of play ` +
+      `${(100 * moved).toFixed(2)} % of the view changed, paused ${(100 * drift).toFixed(3)} %`,
+  );
+  assert.ok(moved > 0.002, `the view did not change while playing (${moved})`);
+  assert.ok(drift < 0.0005, `the view changed while paused (${drift})`);
+  await page.close();
+});
+
 test('an unknown mesh name ends in "bvseg: error"', async () => {
   const { page, title, text } = await runPage('mesh=no-such-mesh&autorun=1');
   assert.ok(title.startsWith('bvseg: error'), title);

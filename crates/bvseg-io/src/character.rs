@@ -405,7 +405,10 @@ impl Channel {
 }
 
 struct Animation {
+    /// The glTF animation's name, if it has one.
     name: Option<String>,
+    /// Its index in the file, which names it when it has no name (`animation N`).
+    index: usize,
     channels: Vec<Channel>,
     keys: Vec<f64>,
 }
@@ -477,6 +480,7 @@ fn read_animations(
         if !channels.is_empty() {
             out.push(Animation {
                 name: anim.name().map(str::to_owned),
+                index: anim.index(),
                 channels,
                 keys,
             });
@@ -724,6 +728,19 @@ impl Character {
             }),
         };
         (rig, info)
+    }
+
+    /// The animations' names, in the order [`Pose::animation`] numbers them (animations
+    /// with no transform channel are left out, as they pose nothing).
+    pub(crate) fn animation_names(&self) -> Vec<String> {
+        self.animations
+            .iter()
+            .map(|a| {
+                a.name
+                    .clone()
+                    .unwrap_or_else(|| format!("animation {}", a.index))
+            })
+            .collect()
     }
 
     /// The sampled poses: every key and the midpoints between keys, thinned evenly when

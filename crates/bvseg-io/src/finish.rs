@@ -52,6 +52,10 @@ pub struct LoadedMesh {
     /// write the mesh skinned and animated ([`crate::export::ExportOptions::skinning`]);
     /// `None` for any other file.
     pub skinning: Option<std::sync::Arc<crate::Skinning>>,
+    /// The names of a skinned file's animations, indexed by [`bvseg_core::Pose::animation`]
+    /// (a glTF animation without a name is called `animation N`, N its index in the file);
+    /// empty for any other file.
+    pub animations: Vec<String>,
 }
 
 impl LoadedMesh {
@@ -214,6 +218,7 @@ pub(crate) fn finish(raw: RawMesh, name: &str) -> Result<LoadedMesh, IoError> {
         dropped,
         character: None,
         skinning: None,
+        animations: Vec::new(),
     })
 }
 

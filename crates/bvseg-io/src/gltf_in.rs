@@ -144,6 +144,7 @@ pub(crate) fn read_gltf(
         .map_err(|e| err(name, e.to_string()))?;
     loaded.character = Some(info);
     loaded.skinning = Some(std::sync::Arc::new(character.skinning(&doc)));
+    loaded.animations = character.animation_names();
     Ok(loaded)
 }
 

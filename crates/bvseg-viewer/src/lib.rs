@@ -10,11 +10,14 @@
 //!   with its history; [`budget`] sizes each frame's share of the work.
 //! - [`meshes`]: the bundled sample meshes and the one function that turns file bytes into a mesh.
 //! - [`scene`], [`camera`], [`render`]: the 3D view (CPU geometry, orbit camera, glow renderer).
+//! - [`animation`]: a character's animation played in the view, its volumes moving with
+//!   their bones.
 //! - [`kinds`]: the volume kinds a run may use (the controls' presets, names, part sizes).
 //! - [`plot`]: TOV and MOV against k.
 //! - [`platform`]: what differs between native and web (reporting, files).
 #![warn(missing_docs)]
 
+pub mod animation;
 pub mod app;
 pub mod budget;
 pub mod camera;

@@ -45,6 +45,7 @@ mod native {
             name,
             mesh: file.mesh,
             warnings: file.warnings,
+            animations: file.animations,
         })
     }
 

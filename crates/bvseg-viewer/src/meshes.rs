@@ -1,7 +1,8 @@
 //! The bundled sample meshes, and turning file bytes into a mesh.
 use bvseg_core::Mesh;
 
-/// A sample mesh compiled into the viewer (licences in `assets/meshes/README.md`).
+/// A sample mesh compiled into the viewer (licences in `assets/meshes/README.md` and
+/// `assets/characters/README.md`).
 #[derive(Debug, Clone, Copy)]
 pub struct BundledMesh {
     /// Name used in the menu and in the page's `?mesh=NAME` parameter (the file stem).
@@ -34,6 +35,15 @@ pub const BUNDLED: &[BundledMesh] = &[
         about: "Dog, Princeton Segmentation Benchmark model 398",
         bytes: include_bytes!("../../../assets/meshes/fourleg_2.obj"),
     },
+    // The small one of the bundled characters (the other, CesiumMan, would put the page's
+    // module over its size budget: open it as a file).
+    BundledMesh {
+        name: "RiggedSimple",
+        file: "RiggedSimple.glb",
+        about:
+            "A skinned, animated cylinder: glTF sample model Rigged Simple (CC-BY 4.0, © Cesium)",
+        bytes: include_bytes!("../../../assets/characters/RiggedSimple.glb"),
+    },
 ];
 
 /// The bundled mesh called `name` (its stem, or its file name).
@@ -61,6 +71,9 @@ pub struct LoadedFile {
     pub mesh: Mesh,
     /// One line per thing loading changed or found wrong (welded vertices, holes, ...).
     pub warnings: Vec<String>,
+    /// The names of a skinned glTF character's animations (indexed by
+    /// [`bvseg_core::Pose::animation`]); empty for any other file.
+    pub animations: Vec<String>,
 }
 
 /// Turns the bytes of a mesh file into a mesh through [`bvseg_io::load_bytes`] (OBJ, glTF,
@@ -83,6 +96,7 @@ pub fn load_mesh_bytes(bytes: &[u8], name: &str) -> Result<LoadedFile, String> {
     Ok(LoadedFile {
         mesh: loaded.mesh,
         warnings,
+        animations: loaded.animations,
     })
 }
 
@@ -94,7 +108,13 @@ mod tests {
     fn every_bundled_mesh_loads() {
         for m in BUNDLED {
             let mesh = load_bundled(m).unwrap();
-            assert!(mesh.triangles().len() > 1000, "{}", m.name);
+            assert!(mesh.triangles().len() > 800, "{}", m.name);
+            // The character comes with its skeleton and its animation's poses.
+            let poses = mesh
+                .rig()
+                .and_then(|r| r.skin.as_ref())
+                .map_or(0, |s| s.poses.len());
+            assert_eq!(poses > 0, m.file.ends_with(".glb"), "{}", m.name);
             assert!(bundled(m.name).is_some() && bundled(m.file).is_some());
         }
         assert!(bundled("nope").is_none());

@@ -3,8 +3,8 @@
 //! the CPU keeps the renderer a dumb uploader, and lets the tests check the geometry.
 use std::sync::OnceLock;
 
-use bvseg_core::{BoundingVolume, Mesh, Shape};
-use glam::{DVec3, Vec3};
+use bvseg_core::{BoundingVolume, Mesh, Pose, Shape, Skin};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use crate::session::{Snapshot, UNKNOWN_PART};
 
@@ -66,15 +66,41 @@ pub struct MeshGeometry {
 }
 
 impl MeshGeometry {
-    /// Prepares `mesh`.
+    /// Prepares `mesh` in its rest pose. The radius of a rigged mesh covers its sampled poses
+    /// too, so that the view frames the whole animation.
     pub fn new(mesh: &Mesh) -> Self {
         let (lo, hi) = mesh.bbox();
         let center = (lo + hi) * 0.5;
-        let radius = ((hi - lo).length() * 0.5) as f32;
-        let mut corners = Vec::with_capacity(mesh.triangles().len() * 3);
-        let mut normals = Vec::with_capacity(mesh.triangles().len());
-        for t in 0..mesh.triangles().len() {
-            let c = mesh.corners(t).map(|p| (p - center).as_vec3());
+        let mut radius = (hi - lo).length() * 0.5;
+        if let Some(skin) = mesh.rig().and_then(|r| r.skin.as_ref()) {
+            for p in skin.poses.iter().flat_map(|p| &p.vertices) {
+                radius = radius.max((*p - center).length());
+            }
+        }
+        let triangles = (0..mesh.triangles().len()).map(|t| mesh.corners(t));
+        Self::from_triangles(center, radius as f32, triangles)
+    }
+
+    /// This rest-pose geometry of a rigged mesh in one of its sampled poses: the corners the
+    /// loader skinned there ([`Pose::vertices`] through [`Skin::corners`]), around the rest
+    /// pose's centre so that the view stays where it is.
+    pub fn posed(&self, skin: &Skin, pose: &Pose) -> Self {
+        let triangles = skin
+            .corners
+            .iter()
+            .map(|c| c.map(|i| pose.vertices.get(i as usize).copied().unwrap_or_default()));
+        Self::from_triangles(self.center, self.radius, triangles)
+    }
+
+    fn from_triangles(
+        center: DVec3,
+        radius: f32,
+        triangles: impl ExactSizeIterator<Item = [DVec3; 3]>,
+    ) -> Self {
+        let mut corners = Vec::with_capacity(triangles.len() * 3);
+        let mut normals = Vec::with_capacity(triangles.len());
+        for t in triangles {
+            let c = t.map(|p| (p - center).as_vec3());
             normals.push((c[1] - c[0]).cross(c[2] - c[0]).normalize_or_zero());
             corners.extend_from_slice(&c);
         }
@@ -125,10 +151,12 @@ fn dim(c: [f32; 3]) -> [f32; 3] {
 }
 
 /// Builds what the view draws: `mesh` coloured by `snapshot`'s parts (when given and asked
-/// for), the snapshot's volumes, and `selected`'s part highlighted.
+/// for), the snapshot's volumes, volume `i` moved by `moves[i]` when given (a character's
+/// pose: see [`crate::animation`]; empty at rest), and `selected`'s part highlighted.
 pub fn build(
     mesh: &MeshGeometry,
     snapshot: Option<&Snapshot>,
+    moves: &[DMat4],
     selected: Option<usize>,
     display: Display,
 ) -> Geometry {
@@ -158,6 +186,7 @@ pub fn build(
         return g;
     };
     for (i, v) in snap.volumes.iter().enumerate() {
+        let motion = moves.get(i).map(|&m| Motion::new(m));
         let lit = selected.is_none_or(|s| s == i);
         let c = if lit {
             part_color(i)
@@ -171,9 +200,9 @@ pub fn build(
                     Some(_) => 0.06,
                     None => 0.22,
                 };
-                volume_surface(&mut g.translucent, v, mesh.center, c, a);
+                volume_surface(&mut g.translucent, v, motion, mesh.center, c, a);
             }
-            VolumeStyle::Wireframe => volume_outline(&mut g.lines, v, mesh.center, c),
+            VolumeStyle::Wireframe => volume_outline(&mut g.lines, v, motion, mesh.center, c),
             VolumeStyle::Hidden => {}
         }
     }
@@ -467,25 +496,66 @@ pub fn volume_edges(v: &BoundingVolume) -> Vec<[DVec3; 2]> {
     out
 }
 
-/// Appends the triangles of `v`'s surface, relative to `origin`, in colour `c` with alpha `a`.
-pub(crate) fn volume_surface(
+/// How a volume moves from the rest pose to the pose drawn: points by an affine matrix,
+/// normals by the inverse transpose of its linear part (a bone's matrix may scale).
+#[derive(Debug, Clone, Copy)]
+struct Motion {
+    points: DMat4,
+    normals: DMat3,
+}
+
+impl Motion {
+    fn new(points: DMat4) -> Self {
+        Self {
+            points,
+            normals: DMat3::from_mat4(points).inverse().transpose(),
+        }
+    }
+
+    fn point(m: Option<Self>, p: DVec3) -> DVec3 {
+        m.map_or(p, |m| m.points.transform_point3(p))
+    }
+
+    fn normal(m: Option<Self>, n: DVec3) -> DVec3 {
+        m.map_or(n, |m| (m.normals * n).normalize_or_zero())
+    }
+}
+
+/// Appends the triangles of `v`'s surface, moved by `motion`, relative to `origin`, in colour
+/// `c` with alpha `a`.
+fn volume_surface(
     out: &mut Vec<f32>,
     v: &BoundingVolume,
+    motion: Option<Motion>,
     origin: DVec3,
     c: [f32; 3],
     a: f32,
 ) {
     for tri in volume_triangles(v) {
         for (p, n) in tri {
-            push(out, (p - origin).as_vec3(), n.as_vec3(), c, a);
+            let p = Motion::point(motion, p) - origin;
+            push(out, p.as_vec3(), Motion::normal(motion, n).as_vec3(), c, a);
         }
     }
 }
 
-fn volume_outline(out: &mut Vec<f32>, v: &BoundingVolume, origin: DVec3, c: [f32; 3]) {
+fn volume_outline(
+    out: &mut Vec<f32>,
+    v: &BoundingVolume,
+    motion: Option<Motion>,
+    origin: DVec3,
+    c: [f32; 3],
+) {
     for [a, b] in volume_edges(v) {
-        push(out, (a - origin).as_vec3(), Vec3::ZERO, c, 1.0);
-        push(out, (b - origin).as_vec3(), Vec3::ZERO, c, 1.0);
+        for p in [a, b] {
+            push(
+                out,
+                (Motion::point(motion, p) - origin).as_vec3(),
+                Vec3::ZERO,
+                c,
+                1.0,
+            );
+        }
     }
 }
 
@@ -653,7 +723,7 @@ mod tests {
         assert!((mesh.radius - 3f32.sqrt() / 2.0).abs() < 1e-6);
         for shape in Shape::ALL {
             let snap = snapshot(shape);
-            let g = build(&mesh, Some(&snap), None, Display::default());
+            let g = build(&mesh, Some(&snap), &[], None, Display::default());
             assert_eq!(g.counts()[0], 36, "the cube, opaque");
             let v = &snap.volumes[0];
             assert_eq!(g.counts()[2], 3 * volume_triangles(v).len(), "{shape:?}");
@@ -667,11 +737,53 @@ mod tests {
                 volumes: VolumeStyle::Wireframe,
                 ..Display::default()
             };
-            let g = build(&mesh, Some(&snap), None, w);
+            let g = build(&mesh, Some(&snap), &[], None, w);
             assert!(g.translucent.is_empty() && g.counts()[1] > 0);
             for vert in g.lines.chunks(VERTEX_FLOATS) {
                 let p = Vec3::new(vert[0], vert[1], vert[2]).as_dvec3() + mesh.center;
                 assert!((v.gauge(p) - 1.0).abs() < 1e-5, "{shape:?} {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn moved_volumes_are_drawn_on_their_moved_surface() {
+        let mesh = MeshGeometry::new(&cube());
+        // A bone's turn and shift, with some stretch along one axis.
+        let m = DMat4::from_translation(DVec3::new(0.3, -1.0, 2.0))
+            * DMat4::from_rotation_y(0.7)
+            * DMat4::from_scale(DVec3::new(1.0, 1.3, 1.0));
+        let back = m.inverse();
+        for shape in Shape::ALL {
+            let snap = snapshot(shape);
+            let v = &snap.volumes[0];
+            for style in [VolumeStyle::Translucent, VolumeStyle::Wireframe] {
+                let d = Display {
+                    volumes: style,
+                    ..Display::default()
+                };
+                let rest = build(&mesh, Some(&snap), &[], None, d);
+                let g = build(&mesh, Some(&snap), &[m], None, d);
+                assert_eq!(g.counts(), rest.counts(), "{shape:?}");
+                assert_eq!(
+                    g.opaque, rest.opaque,
+                    "the mesh is not moved by the volumes"
+                );
+                let drawn = if style == VolumeStyle::Wireframe {
+                    &g.lines
+                } else {
+                    &g.translucent
+                };
+                for vert in drawn.chunks(VERTEX_FLOATS) {
+                    let p = Vec3::new(vert[0], vert[1], vert[2]).as_dvec3() + mesh.center;
+                    let q = back.transform_point3(p);
+                    assert!((v.gauge(q) - 1.0).abs() < 1e-5, "{shape:?} {p}");
+                    if style == VolumeStyle::Translucent {
+                        // Outward: the moved centre is behind the surface.
+                        let n = Vec3::new(vert[3], vert[4], vert[5]).as_dvec3();
+                        assert!(n.dot(p - m.transform_point3(v.center)) > 0.0, "{shape:?}");
+                    }
+                }
             }
         }
     }
@@ -719,7 +831,7 @@ mod tests {
             let volumes: Vec<BoundingVolume> = seg.parts.iter().map(|p| p.volume.clone()).collect();
             assert!(!volumes.is_empty());
             let snap = snapshot_of(volumes.clone(), mesh.triangles().len());
-            let g = build(&geometry, Some(&snap), None, Display::default());
+            let g = build(&geometry, Some(&snap), &[], None, Display::default());
             let mut drawn = 0;
             for v in &volumes {
                 assert_eq!(v.shape, shape);
@@ -761,23 +873,23 @@ mod tests {
         let mesh = MeshGeometry::new(&cube());
         let snap = snapshot(Shape::Obb);
         let colour = |g: &Geometry| [g.opaque[6], g.opaque[7], g.opaque[8]];
-        let g = build(&mesh, Some(&snap), None, Display::default());
+        let g = build(&mesh, Some(&snap), &[], None, Display::default());
         assert_eq!(colour(&g), part_color(0));
         let plain = Display {
             colour_by_part: false,
             volumes: VolumeStyle::Hidden,
             ..Display::default()
         };
-        let g = build(&mesh, Some(&snap), None, plain);
+        let g = build(&mesh, Some(&snap), &[], None, plain);
         assert_eq!(colour(&g), MESH_COLOR);
         assert_eq!(g.counts(), [36, 0, 0]);
-        let g = build(&mesh, Some(&snap), Some(3), Display::default());
+        let g = build(&mesh, Some(&snap), &[], Some(3), Display::default());
         assert_ne!(colour(&g), part_color(0), "parts not selected are dimmed");
         let see_through = Display {
             translucent_mesh: true,
             ..Display::default()
         };
-        let g = build(&mesh, None, None, see_through);
+        let g = build(&mesh, None, &[], None, see_through);
         assert_eq!(g.counts(), [0, 0, 36]);
         assert_ne!(part_color(0), part_color(1));
     }

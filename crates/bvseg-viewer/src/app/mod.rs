@@ -7,6 +7,7 @@ use eframe::egui;
 use eframe::glow;
 use web_time::{Duration, Instant};
 
+use crate::animation::Player;
 use crate::budget::{news_interval, FrameBudget};
 use crate::camera::OrbitCamera;
 use crate::meshes::{self, BUNDLED};
@@ -109,6 +110,8 @@ pub enum StartMesh {
         mesh: Mesh,
         /// What loading changed or found wrong, shown with the mesh's statistics.
         warnings: Vec<String>,
+        /// The names of a character's animations (see [`crate::LoadedFile::animations`]).
+        animations: Vec<String>,
     },
 }
 
@@ -157,6 +160,8 @@ struct SceneKey {
     run: u64,
     snapshot: Option<usize>,
     final_colours: bool,
+    /// The character's sampled pose shown, `None` at rest.
+    pose: Option<usize>,
     selected: Option<usize>,
     display: Display,
 }
@@ -175,6 +180,8 @@ pub struct ViewerApp {
     history_pos: Option<usize>,
     selected_part: Option<usize>,
     display: Display,
+    /// The animation controls, for a mesh whose rig has poses.
+    player: Option<Player>,
     camera: OrbitCamera,
     gpu: Gpu,
     scene: Option<(SceneKey, u64, Arc<Geometry>)>,
@@ -261,6 +268,7 @@ impl ViewerApp {
             history_pos: None,
             selected_part: None,
             display: Display::default(),
+            player: None,
             camera: OrbitCamera::framing(1.0),
             gpu: Arc::new(Mutex::new(None)),
             scene: None,
@@ -292,7 +300,8 @@ impl ViewerApp {
                 name,
                 mesh,
                 warnings,
-            } => app.set_model(name, mesh, warnings),
+                animations,
+            } => app.set_model(name, mesh, warnings, &animations),
         }
         let mut kinds_ok = true;
         if let Some(name) = start.kinds {
@@ -359,6 +368,18 @@ impl ViewerApp {
         self.display
     }
 
+    /// The animation controls' state, for a mesh whose rig has sampled poses (a skinned
+    /// glTF character with animations); `None` for any other mesh.
+    pub fn player(&self) -> Option<&Player> {
+        self.player.as_ref()
+    }
+
+    /// The vertex arrays the 3D view drew in the last frame (`None` before the first, or
+    /// without a mesh).
+    pub fn drawn(&self) -> Option<&Geometry> {
+        self.scene.as_ref().map(|s| s.2.as_ref())
+    }
+
     /// The 3D view's rectangle in the last frame, in points.
     pub fn view_rect(&self) -> Option<egui::Rect> {
         self.view_rect
@@ -367,13 +388,20 @@ impl ViewerApp {
     /// Loads a mesh file's bytes (any way in: menu, dialog, drop), reporting errors in the UI.
     pub fn load_bytes(&mut self, name: &str, bytes: &[u8]) {
         match meshes::load_mesh_bytes(bytes, name) {
-            Ok(f) => self.set_model(name.to_string(), f.mesh, f.warnings),
+            Ok(f) => self.set_model(name.to_string(), f.mesh, f.warnings, &f.animations),
             Err(e) => self.fail(e),
         }
     }
 
-    fn set_model(&mut self, name: String, mesh: Mesh, warnings: Vec<String>) {
+    fn set_model(
+        &mut self,
+        name: String,
+        mesh: Mesh,
+        warnings: Vec<String>,
+        animations: &[String],
+    ) {
         let geometry = Arc::new(MeshGeometry::new(&mesh));
+        self.player = Player::new(mesh.rig(), animations);
         self.camera = OrbitCamera::framing(geometry.radius);
         self.model = Some(Model {
             name,
@@ -482,6 +510,12 @@ impl ViewerApp {
             self.run();
         }
         self.advance();
+        if let Some(p) = self.player.as_mut().filter(|p| p.playing()) {
+            // egui's frame time: the same clock natively and in the page, and steady in the
+            // tests (no wall clock).
+            p.advance(f64::from(ctx.input(|i| i.stable_dt)));
+            ctx.request_repaint();
+        }
         if self.status == Status::Running {
             match self.next_frame {
                 Some(wait) => ctx.request_repaint_after(wait),

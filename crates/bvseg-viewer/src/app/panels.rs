@@ -254,6 +254,11 @@ impl ViewerApp {
                 self.cancel();
             }
         });
+        // Above the refinement plot, which appears with a run: the controls stay in place.
+        if self.player.is_some() {
+            ui.separator();
+            self.animation(ui);
+        }
         ui.separator();
         self.history(ui);
         ui.separator();
@@ -370,6 +375,75 @@ impl ViewerApp {
         });
     }
 
+    /// The animation controls of a character: which animation, play or pause, the time, the
+    /// rest pose.
+    fn animation(&mut self, ui: &mut egui::Ui) {
+        let follow = self.volumes_follow().is_some();
+        let Some(player) = self.player.as_mut() else {
+            return;
+        };
+        ui.heading("Animation");
+        let names: Vec<String> = player.clips().iter().map(|c| c.name.clone()).collect();
+        if names.len() > 1 {
+            let mut chosen = player.clip();
+            let combo = egui::ComboBox::from_label("Animation")
+                .selected_text(names[chosen].as_str())
+                .show_ui(ui, |ui| {
+                    for (i, name) in names.iter().enumerate() {
+                        ui.selectable_value(&mut chosen, i, name.as_str());
+                    }
+                });
+            note_widget("Animation", combo.response.rect);
+            player.set_clip(chosen);
+        } else {
+            ui.label(names[0].as_str());
+        }
+        ui.horizontal(|ui| {
+            let label = if player.playing() { "Pause" } else { "Play" };
+            let play = ui.button(label);
+            note_widget(label, play.rect);
+            if play.clicked() {
+                if player.playing() {
+                    player.pause();
+                } else {
+                    player.play();
+                }
+            }
+            let rest = ui.add_enabled(!player.at_rest(), egui::Button::new("Rest pose"));
+            note_widget("Rest pose", rest.rect);
+            if rest.clicked() {
+                player.rest();
+            }
+        });
+        let clip = &player.clips()[player.clip()];
+        let (start, end, poses) = (clip.start(), clip.end(), clip.len());
+        let mut time = player.time();
+        ui.horizontal(|ui| {
+            let label = ui.label("Time");
+            let r = ui
+                .add(egui::Slider::new(&mut time, start..=end).suffix(" s"))
+                .labelled_by(label.id);
+            note_widget("Time", r.rect);
+            if r.changed() {
+                player.set_time(time);
+            }
+        });
+        let shown = match player.pose_in_clip() {
+            None => "rest pose (as loaded)".to_string(),
+            Some(i) => format!("sampled pose {} of {poses}", i + 1),
+        };
+        ui.label(shown);
+        if !player.at_rest() && !follow {
+            ui.label(
+                RichText::new(
+                    "The volumes follow the animation once a run is done (at its last step).",
+                )
+                .small()
+                .weak(),
+            );
+        }
+    }
+
     pub(super) fn statistics(&mut self, ui: &mut egui::Ui) {
         ui.heading("Statistics");
         let snap = self.shown_snapshot().cloned();
@@ -392,6 +466,21 @@ impl ViewerApp {
                 if let Some(m) = &self.model {
                     row("Mesh", m.name.clone());
                     row("Triangles", m.mesh.triangles().len().to_string());
+                    if let Some(rig) = m.mesh.rig() {
+                        let poses = rig.skin.as_ref().map_or(0, |s| s.poses.len());
+                        let animations = self.player.as_ref().map_or(0, |p| p.clips().len());
+                        let s = |n: usize| if n == 1 { "" } else { "s" };
+                        let joints = rig.skeleton.joints.len();
+                        row(
+                            "Rig",
+                            format!(
+                                "{joints} joint{} · {animations} animation{} · {poses} pose{}",
+                                s(joints),
+                                s(animations),
+                                s(poses)
+                            ),
+                        );
+                    }
                 }
 
                 if let Some(s) = &self.session {

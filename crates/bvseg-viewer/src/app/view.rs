@@ -6,18 +6,21 @@ use eframe::egui::{self, Color32};
 use eframe::egui_glow;
 
 use super::{SceneKey, ViewerApp};
+use crate::animation::{self, Player};
 use crate::render::{Frame, Renderer};
-use crate::scene::{self, Geometry};
+use crate::scene::{self, Geometry, VolumeStyle};
 
 impl ViewerApp {
     fn scene_geometry(&mut self) -> Option<(u64, Arc<Geometry>)> {
         let model = self.model.as_ref()?;
         let snap = self.shown_snapshot();
+        let pose = self.player.as_ref().and_then(Player::pose);
         let key = SceneKey {
             model: self.model_id,
             run: self.run_id,
             snapshot: self.shown_step(),
             final_colours: self.showing_result(),
+            pose,
             selected: self.selected_part,
             display: self.display,
         };
@@ -26,15 +29,42 @@ impl ViewerApp {
                 return Some((*generation, g.clone()));
             }
         }
-        let g = Arc::new(scene::build(
-            &model.geometry,
-            snap,
-            self.selected_part,
-            self.display,
-        ));
+        let rig = model.mesh.rig();
+        let posed = pose.and_then(|p| {
+            let skin = rig?.skin.as_ref()?;
+            Some((skin, skin.poses.get(p)?))
+        });
+        let g = match posed {
+            None => scene::build(&model.geometry, snap, &[], self.selected_part, self.display),
+            Some((skin, pose)) => {
+                let mesh = model.geometry.posed(skin, pose);
+                // Only the result's volumes have bones (and enclose the posed surface): the
+                // volumes of a step before it stay hidden in a pose.
+                let moves = match (self.volumes_follow(), rig) {
+                    (Some(bones), Some(rig)) => animation::motions(bones, &rig.skeleton, pose),
+                    _ => Vec::new(),
+                };
+                let mut display = self.display;
+                if moves.is_empty() {
+                    display.volumes = VolumeStyle::Hidden;
+                }
+                scene::build(&mesh, snap, &moves, self.selected_part, display)
+            }
+        };
+        let g = Arc::new(g);
         self.generation += 1;
         self.scene = Some((key, self.generation, g.clone()));
         Some((self.generation, g))
+    }
+
+    /// The bones of the volumes shown, when they follow a character's animation: the shown
+    /// step is the result's final one, on a mesh with sampled poses.
+    pub(super) fn volumes_follow(&self) -> Option<Vec<Option<usize>>> {
+        let skin = self.model.as_ref()?.mesh.rig()?.skin.as_ref()?;
+        if skin.poses.is_empty() || !self.showing_result() {
+            return None;
+        }
+        Some(self.result()?.parts.iter().map(|p| p.bone).collect())
     }
 
     pub(super) fn view(&mut self, ui: &mut egui::Ui) {
