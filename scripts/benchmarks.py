@@ -70,8 +70,19 @@ class Bench:
             if a.quick else ["--grid", "1000000", "--surface-points", "100000"]
 
     def judge(self, mesh, vol):
-        _, out = run([self.py, SHARED / "tools/bveval.py", mesh, vol, "--json", "--seed", "0"] + self.grid)
-        return json.loads(out)
+        """The judge's figures, cached by the bytes judged (bvseg's outputs are deterministic);
+        `None` when the judge fails (it runs out of memory on hulls of thousands of faces)."""
+        key = hashlib.sha256(Path(mesh).read_bytes() + Path(vol).read_bytes()
+                             + " ".join(self.grid).encode()).hexdigest()[:24]
+        hit = self.cache / f"judge.{key}.json"
+        if not hit.exists():
+            try:
+                _, out = run([self.py, SHARED / "tools/bveval.py", mesh, vol, "--json", "--seed", "0"] + self.grid)
+                hit.write_text(out)
+            except RuntimeError as e:
+                print(f"judge failed on {vol}: {str(e)[-200:]}", file=sys.stderr)
+                hit.write_text("null")
+        return json.loads(hit.read_text())
 
     def bvseg_run(self, mesh, name, args):
         vol = self.out / f"{Path(mesh).stem}.{name}.json"
@@ -90,6 +101,10 @@ class Bench:
 
     def record(self, mesh, name, vol, wall):
         j = self.judge(mesh, vol)
+        if j is None:
+            n = len(json.loads(Path(vol).read_text())["volumes"])
+            return {"mesh": Path(mesh).stem, "run": name, "k": n, "tov": NAN, "pmax": NAN, "pmean": NAN,
+                    "surface": NAN, "escape": NAN, "floats": NAN, "s": wall}
         return {"mesh": Path(mesh).stem, "run": name, "k": j["k"], "tov": j["tov"],
                 "pmax": j["protrusion_max_rel"], "pmean": j["protrusion_mean_rel"],
                 "surface": j["coverage_surface"], "escape": j["max_escape_rel"], "floats": j["floats"], "s": wall}
@@ -120,7 +135,7 @@ class Bench:
                 for m in meshes:
                     args = ["--k", str(k)] + ([] if kind == "default" else ["--bv", kind])
                     tovs.append(self.bvseg_run(m, f"{kind}-{k}", args)["tov"])
-                by[(kind, k)] = statistics.median(tovs)
+                by[(kind, k)] = med([{"tov": t} for t in tovs], "tov")
                 print(f"kinds: {kind} k={k} TOV {by[(kind, k)]:.3f}", file=sys.stderr)
         return by
 
@@ -160,8 +175,13 @@ class Bench:
         return native, {k: float(v) for k, v in got.items()}
 
 
+NAN = float("nan")
+
+
 def med(rows, key):
-    return statistics.median(r[key] for r in rows)
+    """The median of `key` over the rows the judge measured (NaN: it failed)."""
+    xs = [r[key] for r in rows if not math.isnan(r[key])]
+    return statistics.median(xs) if xs else NAN
 
 
 def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False):
@@ -228,6 +248,10 @@ def report(a, rows, kinds, starts, speed, page, plots):
         rs = [r for r in rows if r["run"] == n]
         L.append(f"| {n} | {med(rs, 'k'):g} | {med(rs, 'tov'):.3f} | {med(rs, 'pmax'):.4f} | "
                  f"{med(rs, 'pmean'):.4f} | {med(rs, 'surface'):.5f} | {med(rs, 'escape'):.1e} | {med(rs, 'floats'):g} | {med(rs, 's'):.2f} |")
+    failed = [f"{r['mesh']} ({r['run']})" for r in rows if math.isnan(r["tov"])]
+    if failed:
+        L += ["", f"The judge failed (out of memory on hulls of thousands of faces) on: {', '.join(failed)};"
+              " the medians leave those runs out."]
     L += ["", "## Per mesh", "", "| mesh | run | k | TOV | protr. max | protr. mean | surface | escape | floats | s |",
           "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
