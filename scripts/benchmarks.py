@@ -191,7 +191,8 @@ def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False):
     g = (lambda v: math.log10(max(v, 1e-9))) if logy else (lambda v: v)
     xs = [f(x) for s in series.values() for x, _ in s]
     ys = [g(y) for s in series.values() for _, y in s]
-    x0, x1, y0, y1 = min(xs), max(xs), min(min(ys), 0 if not logy else min(ys)), max(ys) * 1.05
+    x0, x1, y0 = min(xs), max(xs), min(ys) if logy else min(min(ys), 0)
+    y1 = max(ys) + 0.05 * (max(ys) - y0)
     px = lambda x: L + (f(x) - x0) / ((x1 - x0) or 1) * (W - L - 130)
     py = lambda y: H - B - (g(y) - y0) / ((y1 - y0) or 1) * (H - B - 30)
     colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2"]
@@ -325,7 +326,7 @@ def main():
     img = (ROOT / "docs/images") if not a.quick else b.out
     plots = [img / "bench-tov-k.svg", img / "bench-time-samples.svg"]
     svg_plot(plots[0], "Judged TOV against k (median)", "k (fixed)", "TOV",
-             {kind: [(k, kinds[(kind, k)]) for k in KS] for kind in KINDS}, logx=True)
+             {kind: [(k, kinds[(kind, k)]) for k in KS] for kind in KINDS}, logx=True, logy=True)
     svg_plot(plots[1], "Time against samples (k = 64)", "samples", "seconds",
              {"bvseg": [(r["n"], r["s"]) for r in speed]}, logx=True, logy=True)
     rel = [os.path.relpath(p, out.parent) for p in plots]
