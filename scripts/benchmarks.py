@@ -223,12 +223,17 @@ def machine():
     return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
 
 
-def report(a, rows, kinds, starts, speed, page, plots):
+def commit():
+    """The checkout measured, read before the run writes its report and plots into it."""
     git = lambda *c: subprocess.run(["git", *c], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    return f"`{git('rev-parse', '--short=12', 'HEAD')}`" + (" (with uncommitted changes)" if git("status", "--porcelain", "-uno") else "")
+
+
+def report(a, rows, kinds, starts, speed, page, plots):
     cmd = "python3 scripts/benchmarks.py" + (" --quick" if a.quick else "") + (" --page" if a.page else "")
     L = ["# bvseg benchmarks", "",
          f"Written by `scripts/benchmarks.py` on {time.strftime('%Y-%m-%d')}; regenerate with `{cmd}`.",
-         f"Commit `{git('rev-parse', '--short=12', 'HEAD')}`{' (with uncommitted changes)' if git('status', '--porcelain', '-uno') else ''};"
+         f"Commit {a.commit};"
          f" machine: {machine()}. Every figure is the shared judge's (`../shared/tools/bveval.py`"
          f" {' '.join(Bench(a).grid)}), on the meshes of `../shared/meshes` (their sources and licences"
          " are in its README). Times are wall-clock seconds of one process (bvseg with every core;"
@@ -299,6 +304,7 @@ def main():
     ap.add_argument("--bvseg", help="the bvseg binary (default: target/release/bvseg, built first)")
     ap.add_argument("--no-build", action="store_true")
     a = ap.parse_args()
+    a.commit = commit()
     if not (SHARED / "tools/bveval.py").exists():
         sys.exit(f"benchmarks.py: no shared tools at {SHARED} (set BVSEG_SHARED)")
     if not a.bvseg and not a.no_build:
