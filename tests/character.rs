@@ -2,13 +2,44 @@
 //! volume moves with a bone and encloses its triangles in every sampled pose.
 // Tests state their expectations by panicking.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use bvseg::{segment, Params};
+use bvseg::{segment, Mesh, Params, Segmentation};
 use bvseg_io::{load, LoadOptions};
 
 const CESIUM_MAN: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/assets/characters/CesiumMan.glb"
 );
+
+/// Every triangle's corners lie in its part's volume at rest (the mesh itself) and, posed by
+/// the file's animations, in that volume moved by the part's bone: G(t) * G(rest)^-1.
+fn assert_enclosed_at_rest_and_in_every_pose(mesh: &Mesh, seg: &Segmentation, what: &str) {
+    let skin = mesh.rig().and_then(|r| r.skin.as_ref()).expect("a skin");
+    let skeleton = seg.skeleton.as_ref().expect("the parts' skeleton");
+    for (t, tri) in mesh.triangles().iter().enumerate() {
+        let part = &seg.parts[seg.triangle_parts[t] as usize];
+        for &v in tri {
+            assert!(
+                part.volume.contains(mesh.vertices()[v as usize]),
+                "{what}: triangle {t} at rest"
+            );
+        }
+    }
+    for pose in &skin.poses {
+        for (t, corners) in skin.corners.iter().enumerate() {
+            let part = &seg.parts[seg.triangle_parts[t] as usize];
+            let b = part.bone.unwrap();
+            let back = skeleton.joints[b].rest * pose.joints[b].inverse();
+            for &c in corners {
+                let p = back.transform_point3(pose.vertices[c as usize]);
+                assert!(
+                    part.volume.contains(p),
+                    "{what}: triangle {t} leaves its volume at t = {}",
+                    pose.time
+                );
+            }
+        }
+    }
+}
 
 #[test]
 fn cesium_man_volumes_follow_its_walk() {
@@ -27,7 +58,6 @@ fn cesium_man_volumes_follow_its_walk() {
         ..Params::default()
     };
     let seg = segment(&loaded.mesh, &params).unwrap();
-    let skeleton = seg.skeleton.as_ref().expect("the parts' skeleton");
     let bones: std::collections::BTreeSet<usize> = seg
         .parts
         .iter()
@@ -35,30 +65,7 @@ fn cesium_man_volumes_follow_its_walk() {
         .collect();
     assert!(bones.len() >= 8, "{} bones", bones.len());
 
-    // Each triangle's corners, posed by the file's animation, lie in its part's volume
-    // moved by the part's bone: G(t) * G(rest)^-1.
-    for pose in &skin.poses {
-        for (t, corners) in skin.corners.iter().enumerate() {
-            let part = &seg.parts[seg.triangle_parts[t] as usize];
-            let b = part.bone.unwrap();
-            let back = skeleton.joints[b].rest * pose.joints[b].inverse();
-            for &c in corners {
-                let p = back.transform_point3(pose.vertices[c as usize]);
-                assert!(
-                    part.volume.contains(p),
-                    "triangle {t} leaves its volume at t = {}",
-                    pose.time
-                );
-            }
-        }
-    }
-    // The rest pose: the mesh itself.
-    for (t, tri) in loaded.mesh.triangles().iter().enumerate() {
-        let part = &seg.parts[seg.triangle_parts[t] as usize];
-        for &v in tri {
-            assert!(part.volume.contains(loaded.mesh.vertices()[v as usize]));
-        }
-    }
+    assert_enclosed_at_rest_and_in_every_pose(&loaded.mesh, &seg, "CesiumMan");
 }
 
 /// A skinned tetrahedron with two joints and a one-second turn, as glTF JSON with an
@@ -196,8 +203,7 @@ fn held_out_characters_when_given() {
     for file in files {
         let loaded = load(&file, &LoadOptions::default()).unwrap();
         let name = file.display();
-        let rig = loaded.mesh.rig().expect("a skinned character");
-        let skin = rig.skin.as_ref().unwrap();
+        assert!(loaded.mesh.rig().is_some(), "{name}: a skinned character");
         let seg = segment(&loaded.mesh, &Params::default()).unwrap();
         let skeleton = seg.skeleton.as_ref().unwrap();
         let bones: std::collections::BTreeSet<usize> =
@@ -207,27 +213,7 @@ fn held_out_characters_when_given() {
             "{name}: {} bones",
             bones.len()
         );
-        for (t, tri) in loaded.mesh.triangles().iter().enumerate() {
-            let part = &seg.parts[seg.triangle_parts[t] as usize];
-            for &v in tri {
-                assert!(part.volume.contains(loaded.mesh.vertices()[v as usize]));
-            }
-        }
-        for pose in &skin.poses {
-            for (t, corners) in skin.corners.iter().enumerate() {
-                let part = &seg.parts[seg.triangle_parts[t] as usize];
-                let b = part.bone.unwrap();
-                let back = skeleton.joints[b].rest * pose.joints[b].inverse();
-                for &c in corners {
-                    let p = back.transform_point3(pose.vertices[c as usize]);
-                    assert!(
-                        part.volume.contains(p),
-                        "{name}: triangle {t} at {}",
-                        pose.time
-                    );
-                }
-            }
-        }
+        assert_enclosed_at_rest_and_in_every_pose(&loaded.mesh, &seg, &name.to_string());
         let glb = bvseg_io::export::to_glb_skinned(
             &seg,
             Some(&loaded.mesh),

@@ -18,6 +18,15 @@ fn bundled(name: &str) -> Mesh {
 
 /// Every triangle lies in the volume of its part (its three corners are inside, and the
 /// volume is convex), and every sample lies in the volume of its part.
+/// `segment` in a pool of `threads` threads.
+fn on_threads(threads: usize, mesh: &Mesh, params: &Params) -> Segmentation {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| segment(mesh, params).unwrap())
+}
+
 fn assert_encloses(mesh: &Mesh, seg: &Segmentation, grid: &Grid) {
     for (t, &p) in seg.triangle_parts.iter().enumerate() {
         let v = &seg.parts[p as usize].volume;
@@ -204,13 +213,7 @@ fn adaptive_sampling_keeps_every_promise() {
         assert!(grid.has_blocks());
         let regular = Grid::from_mesh(&mesh, params.samples).unwrap();
         assert!(grid.h < 0.9 * regular.h, "{} vs {}", grid.h, regular.h);
-        let run = |threads| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| segment(&mesh, &params).unwrap())
-        };
+        let run = |threads| on_threads(threads, &mesh, &params);
         let seg = run(1);
         assert_eq!(seg, run(2), "{skeleton:?}");
         assert_eq!(seg.sample_parts.len(), grid.len());
@@ -243,13 +246,7 @@ fn same_seed_gives_identical_results_on_one_and_two_threads() {
         samples: 6_000,
         ..Params::default()
     };
-    let run = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| segment(&mesh, &params).unwrap())
-    };
+    let run = |threads| on_threads(threads, &mesh, &params);
     let a = run(1);
     let b = run(2);
     assert_eq!(a, b);

@@ -252,14 +252,7 @@ impl Grid {
         let mut list = Vec::with_capacity(6 * grid.points.len());
         for s in 0..grid.points.len() {
             let [i, j, k] = grid.coords[s].map(i64::from);
-            list.extend([
-                grid.sample_at(i - 1, j, k),
-                grid.sample_at(i + 1, j, k),
-                grid.sample_at(i, j - 1, k),
-                grid.sample_at(i, j + 1, k),
-                grid.sample_at(i, j, k - 1),
-                grid.sample_at(i, j, k + 1),
-            ]);
+            list.extend(grid.face_neighbours(i, j, k));
         }
         grid.neighbor_list = list;
         grid
@@ -465,6 +458,19 @@ impl Grid {
         self.sample_of_cell[i as usize + nx * (j as usize + ny * k as usize)]
     }
 
+    /// The samples of the six cells that share a face with cell `(i, j, k)` (`NONE` outside),
+    /// in the order -i, +i, -j, +j, -k, +k.
+    pub fn face_neighbours(&self, i: i64, j: i64, k: i64) -> [u32; 6] {
+        [
+            self.sample_at(i - 1, j, k),
+            self.sample_at(i + 1, j, k),
+            self.sample_at(i, j - 1, k),
+            self.sample_at(i, j + 1, k),
+            self.sample_at(i, j, k - 1),
+            self.sample_at(i, j, k + 1),
+        ]
+    }
+
     /// Number of interior samples.
     pub fn len(&self) -> usize {
         self.points.len()
@@ -598,15 +604,7 @@ mod tests {
             // The samples across the faces, cell by cell.
             let mut across: Vec<u32> = Vec::new();
             for [i, j, k] in g.cells_of(s) {
-                let (i, j, k) = (i64::from(i), i64::from(j), i64::from(k));
-                for t in [
-                    g.sample_at(i - 1, j, k),
-                    g.sample_at(i + 1, j, k),
-                    g.sample_at(i, j - 1, k),
-                    g.sample_at(i, j + 1, k),
-                    g.sample_at(i, j, k - 1),
-                    g.sample_at(i, j, k + 1),
-                ] {
+                for t in g.face_neighbours(i64::from(i), i64::from(j), i64::from(k)) {
                     if t != s as u32 {
                         across.push(t);
                     }

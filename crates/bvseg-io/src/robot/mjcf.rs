@@ -8,7 +8,7 @@ use bvseg_core::{BoundingVolume, Shape};
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::{
-    escape, numbers, read_text, resolve, vec3, Joint, Link, LinkResults, MeshRef, MeshSource,
+    escape, numbers, read_text, resolve_mesh, vec3, Joint, Link, LinkResults, MeshRef, MeshSource,
     Robot, RobotFormat,
 };
 use crate::export::mjcf::{geom_element, hull_asset};
@@ -422,16 +422,7 @@ impl Ctx<'_> {
                     link.name
                 )));
             }
-            let path = resolve(self.meshdir, file).map_err(|tried| IoError::MissingMesh {
-                name: self.name.to_owned(),
-                link: link.name.clone(),
-                file: file.clone(),
-                tried: tried
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            })?;
+            let path = resolve_mesh(self.meshdir, file, self.name, &link.name)?;
             link.meshes.push(MeshRef {
                 path,
                 given: file.clone(),

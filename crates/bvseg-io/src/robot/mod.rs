@@ -409,11 +409,31 @@ pub fn share_parts(volumes: &[Option<f64>], total: usize) -> Vec<usize> {
     out
 }
 
+/// [`resolve`] for link `link` of robot `robot`: a file not found is
+/// [`IoError::MissingMesh`], naming every path tried.
+pub(crate) fn resolve_mesh(
+    dir: &Path,
+    given: &str,
+    robot: &str,
+    link: &str,
+) -> Result<PathBuf, IoError> {
+    resolve(dir, given).map_err(|tried| IoError::MissingMesh {
+        name: robot.to_owned(),
+        link: link.to_owned(),
+        file: given.to_owned(),
+        tried: tried
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+    })
+}
+
 /// Resolves a mesh file name of a robot file: `file://` and `package://NAME/` prefixes
 /// dropped, relative names read from `dir`, then from each of its parents (a ROS package's
 /// meshes often sit beside or above the robot file), and for `package://` also as
 /// `NAME/rest` there. Returns the path found, or the paths tried.
-pub(crate) fn resolve(dir: &Path, given: &str) -> Result<PathBuf, Vec<PathBuf>> {
+fn resolve(dir: &Path, given: &str) -> Result<PathBuf, Vec<PathBuf>> {
     let (rest, package) = if let Some(r) = given.strip_prefix("package://") {
         match r.split_once('/') {
             Some((pkg, rest)) => (rest, Some(pkg)),

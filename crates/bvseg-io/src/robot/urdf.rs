@@ -7,8 +7,8 @@ use bvseg_core::{BoundingVolume, Segmentation, Shape};
 use glam::{DAffine3, DMat3, DVec3};
 
 use super::{
-    escape, matrix_rpy, proper_axes, resolve, rpy_quat, vec3, Joint, Link, LinkResults, MeshRef,
-    MeshSource, Robot, RobotFormat,
+    escape, matrix_rpy, proper_axes, resolve_mesh, rpy_quat, vec3, Joint, Link, LinkResults,
+    MeshRef, MeshSource, Robot, RobotFormat,
 };
 use crate::IoError;
 
@@ -74,16 +74,7 @@ pub(crate) fn parse(
                     let given = mesh.attribute("filename").ok_or_else(|| {
                         bad(format!("link {:?}: a <mesh> has no filename", link.name))
                     })?;
-                    let path = resolve(dir, given).map_err(|tried| IoError::MissingMesh {
-                        name: name.to_owned(),
-                        link: link.name.clone(),
-                        file: given.to_owned(),
-                        tried: tried
-                            .iter()
-                            .map(|p| p.display().to_string())
-                            .collect::<Vec<_>>()
-                            .join(", "),
-                    })?;
+                    let path = resolve_mesh(dir, given, name, &link.name)?;
                     let scale = vec3(mesh.attribute("scale"), DVec3::ONE, "mesh scale", name)?;
                     let origin = origin(el.children().find(|n| n.has_tag_name("origin")), name)?;
                     link.meshes.push(MeshRef {
