@@ -12,12 +12,12 @@
 //! (one pass over the points instead of a radius search); the best directions then get
 //! their best radius. The pattern search skips a direction without its circle when a lower
 //! bound (see [`Circles::quick_bound`]) shows that it cannot beat the current one.
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 
 use glam::{DMat3, DVec2, DVec3};
 
-use super::ball::{circle3_radius_below, finite_shuffled, min_circle_in_order};
+use super::ball::{circle3_radius_below, finite_shuffled, min_circle_hinted, min_circle_in_order};
 use super::extreme_points;
 use crate::linalg::sym_eigen;
 use crate::volume::BoundingVolume;
@@ -67,6 +67,9 @@ struct Circles<'a> {
     known: RefCell<HashMap<[u64; 3], Across>>,
     /// [`fit_with`]'s buffers: the points across and along a direction.
     scratch: RefCell<(Vec<DVec2>, Vec<f64>)>,
+    /// The points the last circle computed rests on: the search tries directions close to
+    /// each other in turn, whose circles mostly rest on the same points.
+    last: Cell<Option<[usize; 3]>>,
 }
 
 /// The points seen along and across a direction.
@@ -87,18 +90,23 @@ impl<'a> Circles<'a> {
             p,
             known: RefCell::default(),
             scratch: RefCell::default(),
+            last: Cell::new(None),
         }
     }
 
     /// The minimum circle (centre, radius) of the points projected on `(u, w)`, the basis
     /// [`fit_with`] takes for `a`; `ends` are the points lowest and highest along `a`.
-    fn of(&self, a: DVec3, flat: &[DVec2], ends: [usize; 2]) -> (DVec2, f64) {
+    fn of(&self, a: DVec3, flat: &mut [DVec2], ends: [usize; 2]) -> (DVec2, f64) {
         let key = a.to_array().map(f64::to_bits);
         if let Some(c) = self.known.borrow().get(&key) {
             return (c.centre, c.radius);
         }
 
-        let (centre, radius, support) = min_circle_in_order(flat);
+        let (centre, radius, support) = match self.last.get() {
+            Some(hint) => min_circle_hinted(flat, hint),
+            None => min_circle_in_order(flat),
+        };
+        self.last.set(Some(support));
         let across = Across {
             centre,
             radius,

@@ -130,9 +130,78 @@ pub fn min_circle(points: &[DVec2]) -> (DVec2, f64) {
 /// indices of the (up to three, repeated when fewer) points the circle was built on: their
 /// own minimum circle is the same, up to round-off.
 pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64, [usize; 3]) {
-    let Some(&first) = p.first() else {
+    let Some(b) = welzl(p) else {
         return (DVec2::ZERO, 0.0, [0; 3]);
     };
+    enclosing(p, b)
+}
+
+/// [`min_circle_in_order`], found from the points `hint` first: the circle of a nearby
+/// projection of the same points rests on the same few points or on close ones, and starting
+/// from them spares most of the incremental algorithm's updates. The circle is then computed
+/// again from the points it rests on, in the order [`min_circle_in_order`] would have taken
+/// them, so that both give the same bits whenever they end on the same points (always, but
+/// for points that lie on the circle within round-off, where either circle is as good).
+pub fn min_circle_hinted(p: &mut [DVec2], hint: [usize; 3]) -> (DVec2, f64, [usize; 3]) {
+    // The hint's points swapped to the front (and back afterwards: `p` is the caller's).
+    let mut swaps: Vec<(usize, usize)> = Vec::with_capacity(3);
+    let mut front = 0;
+    for h in hint {
+        // Where the hinted point is now, after the swaps so far.
+        let at = swaps.iter().fold(h, |x, &(a, b)| {
+            if x == a {
+                b
+            } else if x == b {
+                a
+            } else {
+                x
+            }
+        });
+        if at < p.len() && at >= front {
+            p.swap(front, at);
+            swaps.push((front, at));
+            front += 1;
+        }
+    }
+    let found = welzl(p);
+    for &(a, b) in swaps.iter().rev() {
+        p.swap(a, b);
+    }
+    let Some((_, at)) = found else {
+        return (DVec2::ZERO, 0.0, [0; 3]);
+    };
+    // The same points in the input's indices, largest first: the order in which the plain
+    // algorithm's loops (`i > j > k`) would have built the circle on them.
+    let input = |x: usize| {
+        swaps.iter().rev().fold(x, |x, &(a, b)| {
+            if x == a {
+                b
+            } else if x == b {
+                a
+            } else {
+                x
+            }
+        })
+    };
+    let mut on: Vec<usize> = at.map(input).to_vec();
+    on.sort_unstable_by(|a, b| b.cmp(a));
+    on.dedup();
+    let (b, support) = match on[..] {
+        [i, j, k] => (circle3(p[i], p[j], p[k]), [i, j, k]),
+        [i, j] => {
+            let c = 0.5 * (p[i] + p[j]);
+            ((c, (p[i] - c).length_squared()), [i, j, j])
+        }
+        _ => ((p[on[0]], 0.0), [on[0]; 3]),
+    };
+    enclosing(p, (b, support))
+}
+
+/// The incremental minimum circle of `p` in its order: the circle (centre and squared
+/// radius) and the indices it rests on (`[i; 3]` for one point, `[i, j, j]` for two, with
+/// `i > j > k`); `None` for no points.
+fn welzl(p: &[DVec2]) -> Option<((DVec2, f64), [usize; 3])> {
+    let &first = p.first()?;
     let inside = |(c, r2): (DVec2, f64), q: DVec2| (q - c).length_squared() <= r2 * (1.0 + SLACK);
     let mut b = (first, 0.0);
     let mut support = [0; 3];
@@ -158,7 +227,12 @@ pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64, [usize; 3]) {
             }
         }
     }
-    // Round-off may leave a point a hair outside; the radius covers every point exactly.
+    Some((b, support))
+}
+
+/// The circle `b` grown to hold every point of `p` exactly: round-off may leave a point a
+/// hair outside.
+fn enclosing(p: &[DVec2], (b, support): ((DVec2, f64), [usize; 3])) -> (DVec2, f64, [usize; 3]) {
     let r2 = p
         .iter()
         .map(|&q| (q - b.0).length_squared())
@@ -294,6 +368,30 @@ mod tests {
         let b = min_ball(&flat, 1e-9);
         assert!(flat.iter().all(|&q| b.contains(q)) && b.radius() < 1.03);
         assert_eq!(min_ball(&[DVec3::ONE], 0.5).radius(), 0.5);
+    }
+
+    /// From any hint, the same circle as without one, to the bit, on points in general
+    /// position (and whatever the hint, on the points it was given, left as they were).
+    #[test]
+    fn a_hinted_circle_is_the_plain_one() {
+        let mut r = Rng::new(11);
+        for n in [1, 2, 3, 4, 7, 30, 200] {
+            for _ in 0..200 {
+                let p: Vec<DVec2> = (0..n)
+                    .map(|_| DVec2::new(r.next_f64() * 3.0, r.next_f64()))
+                    .collect();
+                let plain = min_circle_in_order(&p);
+                let hint = [r.below(n + 1), r.below(n), r.below(n)];
+                let mut q = p.clone();
+                let hinted = min_circle_hinted(&mut q, hint);
+                assert_eq!(q, p);
+                assert_eq!(
+                    (hinted.0.to_array().map(f64::to_bits), hinted.1.to_bits(), hinted.2),
+                    (plain.0.to_array().map(f64::to_bits), plain.1.to_bits(), plain.2),
+                    "n {n}, hint {hint:?}"
+                );
+            }
+        }
     }
 
     #[test]
