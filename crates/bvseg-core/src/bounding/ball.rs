@@ -386,8 +386,16 @@ mod tests {
                 let hinted = min_circle_hinted(&mut q, hint);
                 assert_eq!(q, p);
                 assert_eq!(
-                    (hinted.0.to_array().map(f64::to_bits), hinted.1.to_bits(), hinted.2),
-                    (plain.0.to_array().map(f64::to_bits), plain.1.to_bits(), plain.2),
+                    (
+                        hinted.0.to_array().map(f64::to_bits),
+                        hinted.1.to_bits(),
+                        hinted.2
+                    ),
+                    (
+                        plain.0.to_array().map(f64::to_bits),
+                        plain.1.to_bits(),
+                        plain.2
+                    ),
                     "n {n}, hint {hint:?}"
                 );
             }
