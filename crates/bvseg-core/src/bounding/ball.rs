@@ -140,23 +140,16 @@ pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64, [usize; 3]) {
 /// projection of the same points rests on the same few points or on close ones, and starting
 /// from them spares most of the incremental algorithm's updates. The circle is then computed
 /// again from the points it rests on, in the order [`min_circle_in_order`] would have taken
-/// them, so that both give the same bits whenever they end on the same points (always, but
-/// for points that lie on the circle within round-off, where either circle is as good).
+/// them, so that both give the same bits whenever they end on the same points. They always
+/// do, unless more than three points lie on the circle within round-off; then either circle
+/// is as good.
 pub fn min_circle_hinted(p: &mut [DVec2], hint: [usize; 3]) -> (DVec2, f64, [usize; 3]) {
     // The hint's points swapped to the front (and back afterwards: `p` is the caller's).
     let mut swaps: Vec<(usize, usize)> = Vec::with_capacity(3);
     let mut front = 0;
     for h in hint {
         // Where the hinted point is now, after the swaps so far.
-        let at = swaps.iter().fold(h, |x, &(a, b)| {
-            if x == a {
-                b
-            } else if x == b {
-                a
-            } else {
-                x
-            }
-        });
+        let at = swaps.iter().fold(h, |x, &s| swapped(x, s));
         if at < p.len() && at >= front {
             p.swap(front, at);
             swaps.push((front, at));
@@ -172,17 +165,7 @@ pub fn min_circle_hinted(p: &mut [DVec2], hint: [usize; 3]) -> (DVec2, f64, [usi
     };
     // The same points in the input's indices, largest first: the order in which the plain
     // algorithm's loops (`i > j > k`) would have built the circle on them.
-    let input = |x: usize| {
-        swaps.iter().rev().fold(x, |x, &(a, b)| {
-            if x == a {
-                b
-            } else if x == b {
-                a
-            } else {
-                x
-            }
-        })
-    };
+    let input = |x: usize| swaps.iter().rev().fold(x, |x, &s| swapped(x, s));
     let mut on: Vec<usize> = at.map(input).to_vec();
     on.sort_unstable_by(|a, b| b.cmp(a));
     on.dedup();
@@ -195,6 +178,17 @@ pub fn min_circle_hinted(p: &mut [DVec2], hint: [usize; 3]) -> (DVec2, f64, [usi
         _ => ((p[on[0]], 0.0), [on[0]; 3]),
     };
     enclosing(p, (b, support))
+}
+
+/// Index `x` after the positions `a` and `b` swapped their contents.
+fn swapped(x: usize, (a, b): (usize, usize)) -> usize {
+    if x == a {
+        b
+    } else if x == b {
+        a
+    } else {
+        x
+    }
 }
 
 /// The incremental minimum circle of `p` in its order: the circle (centre and squared
