@@ -16,7 +16,7 @@ import argparse, shlex, statistics, sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchmarks import ROOT, SHARED, Bench, med, run  # noqa: E402
+from benchmarks import SHARED, Bench, med  # noqa: E402
 
 
 def main():
@@ -29,27 +29,23 @@ def main():
     if a.meshes:
         meshes = [SHARED / "meshes" / f"{m}.obj" for m in a.meshes.split(",")]
     bench = Bench(argparse.Namespace(quick=False, bvseg=None))
-    out = ROOT / "target/ab_judge"
-    out.mkdir(parents=True, exist_ok=True)
-    rows = {b: [] for b in a.bins}
+    rows = [[] for _ in a.bins]
     for mesh in meshes:
         line = [f"{mesh.stem:12}"]
         for i, b in enumerate(a.bins):
-            vol = out / f"{mesh.stem}.{i}.json"
-            wall, _ = run([b, "segment", mesh, "-q", "-o", vol] + shlex.split(a.args))
-            r = bench.record(mesh, str(i), vol, wall)
-            rows[b].append(r)
-            line.append(f"k {r['k']:3} TOV {r['tov']:.4f} pmax {r['pmax']:.4f} {wall:5.2f} s")
+            bench.bvseg = Path(b)
+            r = bench.bvseg_run(mesh, f"ab{i}", shlex.split(a.args))
+            rows[i].append(r)
+            line.append(f"k {r['k']:3} TOV {r['tov']:.4f} pmax {r['pmax']:.4f} {r['s']:5.2f} s")
         print(" | ".join(line), flush=True)
     print()
-    for i, b in enumerate(a.bins):
-        rs = rows[b]
+    for i, (b, rs) in enumerate(zip(a.bins, rows)):
         print(f"{i} {b}: median TOV {med(rs, 'tov'):.4f}, protrusion max {med(rs, 'pmax'):.4f},"
               f" k {statistics.median(r['k'] for r in rs)}, {statistics.median(r['s'] for r in rs):.2f} s")
-    ref = rows[a.bins[0]]
-    for i, b in enumerate(a.bins[1:], 1):
-        better = sum(r["tov"] < q["tov"] for r, q in zip(rows[b], ref))
-        worse = sum(r["tov"] > q["tov"] for r, q in zip(rows[b], ref))
+    ref = rows[0]
+    for i, rs in enumerate(rows[1:], 1):
+        better = sum(r["tov"] < q["tov"] for r, q in zip(rs, ref))
+        worse = sum(r["tov"] > q["tov"] for r, q in zip(rs, ref))
         print(f"{i} against 0: TOV lower on {better}, higher on {worse} of {len(ref)} meshes")
 
 

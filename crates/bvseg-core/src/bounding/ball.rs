@@ -144,18 +144,20 @@ pub fn min_circle_in_order(p: &[DVec2]) -> (DVec2, f64, [usize; 3]) {
 /// do, unless more than three points lie on the circle within round-off; then either circle
 /// is as good.
 pub fn min_circle_hinted(p: &mut [DVec2], hint: [usize; 3]) -> (DVec2, f64, [usize; 3]) {
-    // The hint's points swapped to the front (and back afterwards: `p` is the caller's).
-    let mut swaps: Vec<(usize, usize)> = Vec::with_capacity(3);
+    // The hint's points swapped to the front (and back afterwards: `p` is the caller's). No
+    // allocation: this runs for every direction the axial searches try.
+    let mut swaps = [(0, 0); 3];
     let mut front = 0;
     for h in hint {
         // Where the hinted point is now, after the swaps so far.
-        let at = swaps.iter().fold(h, |x, &s| swapped(x, s));
+        let at = swaps[..front].iter().fold(h, |x, &s| swapped(x, s));
         if at < p.len() && at >= front {
             p.swap(front, at);
-            swaps.push((front, at));
+            swaps[front] = (front, at);
             front += 1;
         }
     }
+    let swaps = &swaps[..front];
     let found = welzl(p);
     for &(a, b) in swaps.iter().rev() {
         p.swap(a, b);
@@ -165,17 +167,16 @@ pub fn min_circle_hinted(p: &mut [DVec2], hint: [usize; 3]) -> (DVec2, f64, [usi
     };
     // The same points in the input's indices, largest first: the order in which the plain
     // algorithm's loops (`i > j > k`) would have built the circle on them.
-    let input = |x: usize| swaps.iter().rev().fold(x, |x, &s| swapped(x, s));
-    let mut on: Vec<usize> = at.map(input).to_vec();
+    let mut on = at.map(|x| swaps.iter().rev().fold(x, |x, &s| swapped(x, s)));
     on.sort_unstable_by(|a, b| b.cmp(a));
-    on.dedup();
-    let (b, support) = match on[..] {
-        [i, j, k] => (circle3(p[i], p[j], p[k]), [i, j, k]),
-        [i, j] => {
+    let (b, support) = match on {
+        [i, _, k] if i == k => ((p[i], 0.0), [i; 3]),
+        [i, j, k] if i == j || j == k => {
+            let j = if i == j { k } else { j };
             let c = 0.5 * (p[i] + p[j]);
             ((c, (p[i] - c).length_squared()), [i, j, j])
         }
-        _ => ((p[on[0]], 0.0), [on[0]; 3]),
+        [i, j, k] => (circle3(p[i], p[j], p[k]), [i, j, k]),
     };
     enclosing(p, (b, support))
 }
