@@ -409,15 +409,24 @@ fn removable(solid: &Solid, labels: &[u32], s: usize, label: u32) -> bool {
         }
     }
     let faces = [4usize, 22, 10, 16, 12, 14];
-    let present: Vec<usize> = faces.iter().copied().filter(|&f| inside[f]).collect();
-    if present.len() <= 1 {
+    let mut present = faces.iter().copied().filter(|&f| inside[f]);
+    let Some(first) = present.next() else {
+        return true;
+    };
+    if present.next().is_none() {
         // A leaf of the part (or its last sample, which the caller refuses anyway).
         return true;
     }
+    // A flood over the 27 cells, in fixed arrays: this runs for every boundary sample of
+    // every polish, where a heap allocation per call showed in the profile.
     let mut seen = [false; 27];
-    let mut stack = vec![present[0]];
-    seen[present[0]] = true;
-    while let Some(c) = stack.pop() {
+    let mut stack = [0usize; 27];
+    let mut top = 1;
+    stack[0] = first;
+    seen[first] = true;
+    while top > 0 {
+        top -= 1;
+        let c = stack[top];
         let (x, y, z) = ((c % 3) as i64, ((c / 3) % 3) as i64, (c / 9) as i64);
         for (dx, dy, dz) in [
             (-1, 0, 0),
@@ -434,11 +443,12 @@ fn removable(solid: &Solid, labels: &[u32], s: usize, label: u32) -> bool {
             let nc = (nx + 3 * ny + 9 * nz) as usize;
             if inside[nc] && !seen[nc] {
                 seen[nc] = true;
-                stack.push(nc);
+                stack[top] = nc;
+                top += 1;
             }
         }
     }
-    present.iter().all(|&f| seen[f])
+    faces.iter().all(|&f| !inside[f] || seen[f])
 }
 
 /// The test of [`removable`] and [`leaves_safely`] for a block of adaptive sampling: within
@@ -638,6 +648,55 @@ mod tests {
         } else {
             g
         }
+    }
+
+    /// The 3x3x3 test of [`removable`] on single cells is a flood over the block without its
+    /// centre: checked against a plain flood over the samples themselves, on random labels.
+    #[test]
+    fn removable_is_the_block_flood() {
+        let g = Grid::from_inside_fn(DVec3::ZERO, DVec3::splat(0.5), 0.1, |_| true);
+        let solid = Solid::new(g);
+        let g = &solid.grid;
+        let centre = g.sample_at(2, 2, 2) as usize;
+        let block: Vec<u32> = (0..g.len() as u32)
+            .filter(|&t| {
+                let (c, d) = (g.coords[t as usize], g.coords[centre]);
+                t as usize != centre && (0..3).all(|a| c[a].abs_diff(d[a]) <= 1)
+            })
+            .collect();
+        assert_eq!(block.len(), 26);
+        let mut rng = crate::rng::Rng::new(7);
+        let (mut yes, mut no) = (0, 0);
+        for _ in 0..3000 {
+            let mut labels: Vec<u32> = (0..g.len()).map(|_| (rng.below(3) == 0) as u32).collect();
+            labels[centre] = 0;
+            let faces: Vec<u32> = g
+                .neighbors(centre)
+                .iter()
+                .copied()
+                .filter(|&t| t != NONE && labels[t as usize] == 0)
+                .collect();
+            let expected = faces.len() <= 1 || {
+                let mut seen = vec![faces[0]];
+                let mut stack = vec![faces[0]];
+                while let Some(x) = stack.pop() {
+                    for &t in g.neighbors(x as usize) {
+                        if block.contains(&t) && labels[t as usize] == 0 && !seen.contains(&t) {
+                            seen.push(t);
+                            stack.push(t);
+                        }
+                    }
+                }
+                faces.iter().all(|f| seen.contains(f))
+            };
+            assert_eq!(removable(&solid, &labels, centre, 0), expected);
+            if expected {
+                yes += 1;
+            } else {
+                no += 1;
+            }
+        }
+        assert!(yes > 100 && no > 100, "both answers tried: {yes} and {no}");
     }
 
     /// The local test that lets the Lloyd sweeps skip most connectivity repairs must never
