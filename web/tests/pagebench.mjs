@@ -112,10 +112,11 @@ for (let round = 0; round < rounds; round++) {
   }
 }
 const median = (a) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
-console.log(`median run: ${pages.map((p) => `${p} ${median(results[p]).toFixed(2)} s`).join(', ')}`);
-if (later[pages[0]].length) {
-  console.log(`median later run: ${pages.map((p) => `${p} ${median(later[p]).toFixed(2)} s`).join(', ')}`);
-}
+/** `label: isolated X s, plain Y s`, the medians of `times` (scripts/benchmarks.py reads it). */
+const medians = (label, times) =>
+  console.log(`${label}: ${pages.map((p) => `${p} ${median(times[p]).toFixed(2)} s`).join(', ')}`);
+medians('median run', results);
+if (later[pages[0]].length) medians('median later run', later);
 await context.close();
 s1.close();
 s2.close();
