@@ -6,7 +6,8 @@
 // run, from /proc: the core's workers are `DedicatedWorker`, V8's background compilation
 // `ThreadPoolForeg...`, SwiftShader's drawing `Thread<NN>`), AGAIN=N (then click Run N more
 // times on the same page and print those runs too, and their median last: the browser has
-// compiled the module by then).
+// compiled the module by then), CLICK=S (load the page without autorun, wait S seconds once its
+// Run button is drawn, as a user would, then click Run and time that run).
 import { createServer } from 'node:http';
 import { mkdtempSync, readFileSync, readdirSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -84,6 +85,11 @@ async function result(page) {
   await page.waitForFunction(() => document.title.startsWith('bvseg: '), null, { timeout: 300_000, polling: 100 });
   return JSON.parse(await page.locator('#bvseg-result').textContent());
 }
+/** Clicks the page's Run button. */
+async function clickRun(page) {
+  const rect = await page.evaluate(() => Array.from(window.bvseg.widgetRect('Run') || []));
+  await page.mouse.click(rect[0] + rect[2] / 2, rect[1] + rect[3] / 2);
+}
 const figures = (j) => `${j.time_s.toFixed(2)} s, core ${j.core_s.toFixed(2)} s, ${j.frames} frames, k ${j.k}`;
 
 const results = { isolated: [], plain: [] };
@@ -94,7 +100,13 @@ for (let round = 0; round < rounds; round++) {
   for (const [name, origin] of served) {
     const page = await context.newPage();
     const before = process.env.CPU ? browserThreads() : null;
-    await page.goto(`${origin}/index.html?mesh=${mesh}&autorun=1${process.env.EXTRA || ""}`);
+    const click = process.env.CLICK !== undefined;
+    await page.goto(`${origin}/index.html?mesh=${mesh}${click ? '' : '&autorun=1'}${process.env.EXTRA || ""}`);
+    if (click) {
+      await page.waitForFunction(() => window.bvseg?.widgetRect('Run'), null, { timeout: 60_000, polling: 50 });
+      await page.waitForTimeout(1000 * Number(process.env.CLICK));
+      await clickRun(page);
+    }
     const j = await result(page);
     if (before) console.log(`  CPU (s): ${cpuSince(before, browserThreads())}`);
     const threads = await page.evaluate(() => window.bvseg?.threads);
@@ -102,8 +114,7 @@ for (let round = 0; round < rounds; round++) {
     console.log(`${name} (${threads} threads): run ${figures(j)}`);
     for (let again = 1; again <= Number(process.env.AGAIN || 0); again++) {
       await page.evaluate(() => { document.title = 'bvseg'; });
-      const rect = await page.evaluate(() => Array.from(window.bvseg.widgetRect('Run') || []));
-      await page.mouse.click(rect[0] + rect[2] / 2, rect[1] + rect[3] / 2);
+      await clickRun(page);
       const j2 = await result(page);
       later[name].push(j2.time_s);
       console.log(`  run ${again + 1} on the same page: ${figures(j2)}`);

@@ -103,6 +103,7 @@ mod native {
                 Report::Error(e) => eprintln!("bvseg-viewer: error: {e}"),
             })),
             software_renderer: false,
+            warm_up: false,
         };
         let options = eframe::NativeOptions {
             viewport: eframe::egui::ViewportBuilder::default()

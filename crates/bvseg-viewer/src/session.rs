@@ -25,6 +25,12 @@ pub const UNKNOWN_PART: u16 = u16::MAX;
 /// has it), so that long histories of big meshes stay small in memory.
 pub const MAX_SNAPSHOT_TRIANGLES: usize = 250_000;
 
+/// Samples and largest number of parts of a [`Session::warm_up`] run: every stage and every
+/// kind of fit runs, in about a fifth of a default run of spot natively.
+pub const WARM_UP_SAMPLES: usize = 2000;
+/// See [`WARM_UP_SAMPLES`].
+pub const WARM_UP_MAX_K: usize = 16;
+
 /// The state after one refinement step.
 #[derive(Debug, Clone)]
 pub struct Snapshot {
@@ -210,6 +216,28 @@ impl Session {
         s.stage = Stage::Background(inbox.clone());
         rayon::spawn(move || run_in_background(&mesh, &params, &inbox));
         s
+    }
+
+    /// A small run of `mesh` with `params` in the background whose result nobody looks at, or
+    /// `None` in a build whose runs are stepped. A browser first runs a WebAssembly module in
+    /// baseline code and optimises each function only once it has run a while: the page's
+    /// first run of spot took 1.85 s against 1.42 s for a second one (BENCHMARKS.md). Started
+    /// as the page loads, this leaves the core's hot functions optimised before the user's
+    /// first run. Dropping it stops it.
+    pub fn warm_up(mesh: Arc<Mesh>, params: &Params) -> Option<Self> {
+        let params = Params {
+            samples: WARM_UP_SAMPLES,
+            max_k: WARM_UP_MAX_K,
+            k: None,
+            ..params.clone()
+        };
+        #[cfg(any(feature = "threads", not(target_arch = "wasm32")))]
+        return Some(Self::in_background(mesh, params));
+        #[cfg(not(any(feature = "threads", not(target_arch = "wasm32"))))]
+        {
+            let _ = (mesh, params);
+            None
+        }
     }
 
     /// Stepped: do at least one unit of work (sampling, or one core step), and more while

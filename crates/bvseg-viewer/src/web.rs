@@ -6,7 +6,9 @@
 //! When a run ends, its summary (JSON, see [`crate::app::summary_json`]) is written into
 //! `<pre id="bvseg-result">` and `document.title` starts with `bvseg: done`; on an error
 //! the title is `bvseg: error: <message>`. Scripts wait for the title, and find the controls
-//! to click with [`widget_rect`].
+//! to click with [`widget_rect`]. Without `autorun`, the threaded build starts a small run
+//! that nobody sees as it loads, and stops it at the first Run (see
+//! [`crate::session::Session::warm_up`]).
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
@@ -88,6 +90,9 @@ pub async fn start(canvas_id: String, software_renderer: Option<bool>) -> Result
         kinds: query.get("bv"),
         reporter: Some(Box::new(report)),
         software_renderer: software,
+        // Only the threaded build runs the core beside the page; the other would take the
+        // page's own thread for it.
+        warm_up: cfg!(feature = "threads"),
     };
     runner
         .start(

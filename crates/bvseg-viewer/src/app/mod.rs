@@ -131,6 +131,10 @@ pub struct StartOptions {
     /// then takes its news less often, as each frame costs it more (see
     /// [`crate::budget::news_interval`]). Default `false`.
     pub software_renderer: bool,
+    /// Without `autorun`, start a small run in the background at once and drop it at the
+    /// first real run (see [`Session::warm_up`]): the page's threaded build sets it, for the
+    /// browser's sake. Default `false`.
+    pub warm_up: bool,
 }
 
 impl Default for StartOptions {
@@ -141,6 +145,7 @@ impl Default for StartOptions {
             kinds: None,
             reporter: None,
             software_renderer: false,
+            warm_up: false,
         }
     }
 }
@@ -174,6 +179,8 @@ pub struct ViewerApp {
     model: Option<Model>,
     model_id: u64,
     session: Option<Session>,
+    /// The run of [`StartOptions::warm_up`], until the first real run.
+    warm_up: Option<Session>,
     run_id: u64,
     status: Status,
     /// Step shown; `None` follows the latest.
@@ -263,6 +270,7 @@ impl ViewerApp {
             model: None,
             model_id: 0,
             session: None,
+            warm_up: None,
             run_id: 0,
             status: Status::Idle,
             history_pos: None,
@@ -314,6 +322,12 @@ impl ViewerApp {
             }
         }
         app.pending_run = start.autorun && app.model.is_some() && kinds_ok;
+        if start.warm_up && !app.pending_run {
+            app.warm_up = app
+                .model
+                .as_ref()
+                .and_then(|m| Session::warm_up(m.mesh.clone(), &app.settings.params()));
+        }
         app
     }
 
@@ -430,6 +444,8 @@ impl ViewerApp {
         let Some(model) = &self.model else {
             return;
         };
+        // Stopped, so that the run has every core.
+        self.warm_up = None;
         self.session = Some(Session::new(model.mesh.clone(), self.settings.params()));
         self.run_id += 1;
         self.last_news = None;
@@ -659,6 +675,46 @@ mod tests {
         assert_eq!(v["met"], serde_json::Value::Null);
         assert_eq!(v["frames"].as_u64(), Some(s.calls() as u64));
         assert_eq!(v["view"][3].as_f64(), Some(4.0));
+    }
+
+    #[test]
+    fn a_warm_up_runs_a_small_job_until_the_first_run() {
+        let start = |autorun| {
+            ViewerApp::new(StartOptions {
+                autorun,
+                warm_up: true,
+                ..StartOptions::default()
+            })
+        };
+        assert!(
+            start(true).warm_up.is_none(),
+            "a run at once needs no warm-up"
+        );
+        assert!(ViewerApp::new(StartOptions::default()).warm_up.is_none());
+        let mut app = start(false);
+        let warm = app.warm_up.as_mut().expect("a warm-up");
+        let t0 = Instant::now();
+        while warm.advance(Duration::ZERO) == Progress::Running {
+            assert!(
+                t0.elapsed() < Duration::from_secs(120),
+                "the warm-up never ends"
+            );
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let k = warm.result().expect("the warm-up's result").parts.len();
+        assert!(k > 1 && k <= crate::session::WARM_UP_MAX_K, "k = {k}");
+        let samples = warm.samples();
+        assert!(
+            samples.abs_diff(crate::session::WARM_UP_SAMPLES) * 10
+                < crate::session::WARM_UP_SAMPLES,
+            "{samples} samples"
+        );
+        app.run();
+        assert!(app.warm_up.is_none(), "the first run drops the warm-up");
+        assert_eq!(
+            app.session.as_ref().unwrap().params(),
+            &app.settings.params()
+        );
     }
 
     #[test]
