@@ -23,7 +23,7 @@ fn harness(mesh: &str) -> (Harness<'static, ViewerApp>, Rc<RefCell<Vec<Report>>>
         reporter: Some(Box::new(move |r: &Report| {
             sink.borrow_mut().push(r.clone())
         })),
-        software_renderer: false,
+        ..StartOptions::default()
     });
     let h = Harness::builder()
         .with_size([1280.0, 900.0])
