@@ -242,7 +242,19 @@ fn face_frames(hull: &super::hull::Hull) -> Vec<DMat3> {
     }
     // The projection of a convex polytope along n is the projection of its silhouette: the
     // edges between faces facing n and faces not facing it. Only their ends need the 2D hull.
-    // Each edge as (its two vertices packed, face); sorting pairs up the two faces.
+    // All the normals at once: bit j of a face's mask says whether it faces normal j, so an
+    // edge is on normal j's rim where its two faces' masks differ in bit j.
+    const _: () = assert!(MAX_FACE_NORMALS <= 64);
+    let facing: Vec<u64> = fn_
+        .iter()
+        .map(|(m, _)| {
+            normals.iter().enumerate().fold(0u64, |bits, (j, n)| {
+                bits | (u64::from(m.dot(*n) > 0.0) << j)
+            })
+        })
+        .collect();
+    let mut rims = vec![0u64; hull.vertices.len()];
+    // Each edge once, as the two faces on either side of it.
     let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * nf);
     for (f, t) in hull.faces.iter().enumerate() {
         for e in 0..3 {
@@ -251,44 +263,29 @@ fn face_frames(hull: &super::hull::Hull) -> Vec<DMat3> {
         }
     }
     edges.sort_unstable();
-    let pairs: Vec<[u32; 4]> = edges
-        .windows(2)
-        .filter(|w| w[0].0 == w[1].0)
-        .map(|w| [(w[0].0 >> 32) as u32, w[0].0 as u32, w[0].1, w[1].1])
-        .collect();
+    for w in edges.windows(2).filter(|w| w[0].0 == w[1].0) {
+        let rim = facing[w[0].1 as usize] ^ facing[w[1].1 as usize];
+        rims[(w[0].0 >> 32) as usize] |= rim;
+        rims[w[0].0 as u32 as usize] |= rim;
+    }
     let mut out = Vec::with_capacity(normals.len());
     let mut pts: Vec<DVec2> = Vec::new();
-    let mut front = vec![false; nf];
-    let mut on_rim = vec![false; hull.vertices.len()];
-    for n in normals {
+    for (j, n) in normals.into_iter().enumerate() {
         let basis = frame_from_axis(n);
         let (u, w) = (basis.y_axis, basis.z_axis);
-        for (fr, (m, _)) in front.iter_mut().zip(&fn_) {
-            *fr = m.dot(n) > 0.0;
-        }
-        on_rim.fill(false);
-        for &[a, b, f, g] in &pairs {
-            // Without a branch: which edges are on the rim is data, not a pattern.
-            let rim = front[f as usize] != front[g as usize];
-            on_rim[a as usize] |= rim;
-            on_rim[b as usize] |= rim;
-        }
+        let project = |p: &DVec3| DVec2::new(u.dot(*p), w.dot(*p));
         pts.clear();
         pts.extend(
             hull.vertices
                 .iter()
-                .zip(&on_rim)
-                .filter(|(_, &r)| r)
-                .map(|(&p, _)| DVec2::new(u.dot(p), w.dot(p))),
+                .zip(&rims)
+                .filter(|(_, &r)| r >> j & 1 == 1)
+                .map(|(p, _)| project(p)),
         );
         if pts.len() < 3 {
             // Not a closed surface after all: every vertex.
             pts.clear();
-            pts.extend(
-                hull.vertices
-                    .iter()
-                    .map(|&p| DVec2::new(u.dot(p), w.dot(p))),
-            );
+            pts.extend(hull.vertices.iter().map(project));
         }
         let poly = convex_polygon(&mut pts);
         if let Some(dir) = min_area_rect_dir(&poly) {
