@@ -174,18 +174,17 @@ class Bench:
         # carries: the page builds it when the user exports one). So no output file here.
         native = min(run([self.bvseg, "segment", ROOT / "assets/meshes/spot.obj", "-q"])[0]
                      for _ in range(3))
-        _, out = run(["node", ROOT / "web/tests/pagebench.mjs", "3", "spot"], env={"AGAIN": "1"})
         pages = {}
-        for label, name in (("median run:", "first run"), ("median later run:", "later run")):
-            line = next(l for l in out.splitlines() if l.startswith(label))
-            for k, v in re.findall(r"(\w+) ([\d.]+) s", line):
-                pages[f"{k}, {name}"] = float(v)
-        # A user's first run: Run clicked 3 s after the page shows it, once the threaded page
-        # has warmed the core up (which it does only without autorun).
-        _, out = run(["node", ROOT / "web/tests/pagebench.mjs", "3", "spot"],
-                     env={"CLICK": "3", "PAGES": "isolated"})
-        line = next(l for l in out.splitlines() if l.startswith("median run:"))
-        pages["isolated, first run clicked after 3 s"] = float(re.search(r"([\d.]+) s", line)[1])
+        # Each pagebench run's median lines, as `LABEL: isolated X s, plain Y s`; a user's first
+        # run is Run clicked 3 s after the page shows it, once the threaded page has warmed the
+        # core up (which it does only without autorun).
+        for env, lines in (({"AGAIN": "1"}, (("median run:", "first run"), ("median later run:", "later run"))),
+                           ({"CLICK": "3", "PAGES": "isolated"}, (("median run:", "first run clicked after 3 s"),))):
+            _, out = run(["node", ROOT / "web/tests/pagebench.mjs", "3", "spot"], env=env)
+            for label, name in lines:
+                line = next(l for l in out.splitlines() if l.startswith(label))
+                for k, v in re.findall(r"(\w+) ([\d.]+) s", line):
+                    pages[f"{k}, {name}"] = float(v)
         return native, pages
 
 

@@ -220,11 +220,11 @@ impl Session {
 
     /// A small run of `mesh` with `params` in the background whose result nobody looks at, or
     /// `None` in the page's build without threads (its core runs on the page's own thread).
-    /// A browser first runs a WebAssembly module in
-    /// baseline code and optimises each function only once it has run a while: the page's
-    /// first run of spot took 1.85 s against 1.42 s for a second one (BENCHMARKS.md). Started
-    /// as the page loads, this leaves the core's hot functions optimised before the user's
-    /// first run. Dropping it stops it.
+    /// A browser first runs a WebAssembly module in baseline code and optimises each function
+    /// only once it has run a while, so a page's first run is slower than its later ones
+    /// (docs/viewer.md, "Size and speed", has the figures). Started as the page loads, this
+    /// leaves the core's hot functions optimised before the user's first run. Dropping it
+    /// stops it.
     pub fn warm_up(mesh: Arc<Mesh>, params: &Params) -> Option<Self> {
         let params = Params {
             samples: WARM_UP_SAMPLES,
