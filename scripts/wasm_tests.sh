@@ -14,7 +14,7 @@ if [ -z "$out" ]; then
     echo "wasm_tests.sh: no test module built" >&2
     exit 1
 fi
-node --no-warnings - "$out" same_bits <<'JS'
+node --no-warnings - "$out" same_bits math:: <<'JS'
 const { WASI } = require('node:wasi');
 const { readFileSync } = require('node:fs');
 const [file, ...args] = process.argv.slice(2);

@@ -8,6 +8,7 @@
 //! A parent's volume holds the convex hull of its points, so that hull's volume bounds it
 //! from below: a pair is fitted only once no pair fitted so far is smaller than its bound
 //! (most pairs of large nodes never are, as their nodes merge with others first).
+use crate::math;
 use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
@@ -91,7 +92,7 @@ pub fn build(
             let smallest = pairs
                 .iter()
                 .filter_map(|p| cache[p].volume.as_ref().map(BoundingVolume::volume))
-                .fold(f64::INFINITY, f64::min);
+                .fold(f64::INFINITY, math::min);
             let mut todo: Vec<(usize, usize)> = by_bound
                 .iter()
                 .copied()

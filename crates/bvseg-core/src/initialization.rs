@@ -4,6 +4,7 @@
 //!   k-means++ and kept connected by flooding), the paper's CVT start.
 //! - [`split`]: split one part of an optimised partition, seeding the new part at the
 //!   part's sample farthest from its centre (the paper's refinement step).
+use crate::math;
 use glam::DVec3;
 
 use crate::assignment::{assign, PartMetric, Rule};
@@ -57,7 +58,7 @@ fn seeds(solid: &Solid, k: usize, rng: &mut Rng) -> Vec<usize> {
             seeds
                 .iter()
                 .map(|&s| (x - solid.q[s]).length_squared())
-                .fold(f64::INFINITY, f64::min)
+                .fold(f64::INFINITY, math::min)
         })
         .collect();
     while seeds.len() < k {
@@ -79,7 +80,7 @@ fn seeds(solid: &Solid, k: usize, rng: &mut Rng) -> Vec<usize> {
         seeds.push(next);
         let c = solid.q[next];
         for (s, d) in d2.iter_mut().enumerate() {
-            *d = d.min((solid.q[s] - c).length_squared());
+            *d = math::min(*d, (solid.q[s] - c).length_squared());
         }
     }
     seeds

@@ -4,6 +4,7 @@
 //! positions, relative to a fixed reference point (the grid centre) so that sums of squares
 //! do not lose precision far from the origin. Adding or removing a sample is O(1), and the
 //! covariance, the Legendre ellipsoid and e(S) follow in O(1).
+use crate::math;
 use glam::{DMat3, DVec3};
 
 /// `20 sqrt(5) pi / 3`: vol(Legendre ellipsoid) = this * sqrt(det C).
@@ -121,7 +122,7 @@ impl Moments {
     /// `det C`, clamped at zero.
     #[inline]
     pub fn det_cov(&self, cell_var: f64) -> f64 {
-        det_packed(&self.cov_packed(cell_var)).max(0.0)
+        math::max(det_packed(&self.cov_packed(cell_var)), 0.0)
     }
 
     /// This part's term of F, in units of the cell volume: `n * e = vol(K) / h^3`

@@ -17,6 +17,7 @@
 //! the largest such distance among its corners, twice that estimate. This is exact at the
 //! sampled times and holds between them for motions as smooth as their sampling resolves
 //! (the reader samples every key and enough times between keys: see `bvseg-io`).
+use crate::math;
 use glam::{DMat4, DVec3};
 
 use crate::bounding::hull::hull_points;
@@ -107,7 +108,7 @@ pub fn posed_volumes(
                 && (poses[k - 2].animation, poses[k - 1].animation) == (p.animation, p.animation)
             {
                 for c in 0..n {
-                    worst = worst.max(segment_distance(before[c], before2[c], now[c]));
+                    worst = math::max(worst, segment_distance(before[c], before2[c], now[c]));
                 }
             }
             std::mem::swap(&mut before2, &mut before);

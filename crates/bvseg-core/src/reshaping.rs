@@ -75,7 +75,7 @@ pub fn reshape(
         .iter()
         .zip(counts)
         .map(|(c, &n)| relative(c.len(), n))
-        .fold(0.0, f64::max);
+        .fold(0.0, math::max);
     let mut cov = Coverage::new(solid);
     for c in &cells {
         cov.add(c);
@@ -167,7 +167,7 @@ fn hold(points: &[DVec3], c: DVec3, axes: DMat3, radii: DVec3, min_r: f64) -> Bo
         radii,
         polytope: None,
     };
-    let g = points.iter().map(|&p| v.gauge(p)).fold(0.0, f64::max);
+    let g = points.iter().map(|&p| v.gauge(p)).fold(0.0, math::max);
     if g > 0.0 && g.is_finite() {
         v.radii *= g;
     }

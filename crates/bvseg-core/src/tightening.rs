@@ -8,6 +8,7 @@
 //! and the tolerance. Parts stay connected. Each pass evaluates every candidate move against
 //! the current state (in parallel, fits cached), then applies the improving moves in order of
 //! gain, each re-checked exactly against the state left by the ones before.
+use crate::math;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
@@ -290,7 +291,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             let reach = layer
                 .iter()
                 .map(|&s| to_volume.gauge(g.points[s as usize]))
-                .fold(0.0f64, f64::max);
+                .fold(0.0f64, math::max);
             if reach > REACH {
                 continue;
             }
@@ -340,7 +341,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
             let Some((fa, fb)) = move_fits(fitter, mv, &fits, among) else {
                 continue;
             };
-            let limit = |old: &Fit, n_old: f64| ov(old, n_old).max(mov_tol);
+            let limit = |old: &Fit, n_old: f64| math::max(ov(old, n_old), mov_tol);
             if ov(&fa, mv.m_from.n) > limit(&fits[a], part.parts[a].n)
                 || ov(&fb, mv.m_to.n) > limit(&fits[b], part.parts[b].n)
             {
@@ -361,7 +362,7 @@ pub fn tighten(ctx: &mut Context, part: &mut Partition, passes: Passes) -> usize
                 solid,
                 &[fa.clone(), fb.clone(), fits[a].clone(), fits[b].clone()],
             );
-            if pr[0] > pr[2].max(pr_tol) || pr[1] > pr[3].max(pr_tol) {
+            if pr[0] > math::max(pr[2], pr_tol) || pr[1] > math::max(pr[3], pr_tol) {
                 continue;
             }
             cov.replace(old, new);
@@ -437,13 +438,15 @@ pub fn relieve_worst(ctx: &mut Context, part: &mut Partition, steps: usize) -> u
             let others = (0..ov.len())
                 .filter(|&j| j != a && j != b)
                 .map(|j| ov[j])
-                .fold(0.0f64, f64::max);
-            let mov = others
-                .max(relative(fa.outside.len(), mv.m_from.n))
-                .max(relative(fb.outside.len(), mv.m_to.n));
+                .fold(0.0f64, math::max);
+            let mov = math::max(
+                math::max(others, relative(fa.outside.len(), mv.m_from.n)),
+                relative(fb.outside.len(), mv.m_to.n),
+            );
             let old = [&fits[a].outside, &fits[b].outside];
             let tov = relative(cov.union_if(old, [&fa.outside, &fb.outside]), total);
-            if mov < cur_mov && tov < cur_tov.max(tov_tol) && best.is_none_or(|x| mov < x.0) {
+            if mov < cur_mov && tov < math::max(cur_tov, tov_tol) && best.is_none_or(|x| mov < x.0)
+            {
                 best = Some((mov, i));
             }
         }

@@ -20,6 +20,7 @@ use glam::{DMat3, DVec2, DVec3};
 use super::ball::{circle3_radius_below, finite_shuffled, min_circle_hinted, min_circle_in_order};
 use super::extreme_points;
 use crate::linalg::sym_eigen;
+use crate::math;
 use crate::volume::BoundingVolume;
 #[cfg(test)]
 use crate::volume::Shape;
@@ -145,16 +146,16 @@ impl<'a> Circles<'a> {
             let q = self.p[i];
             DVec2::new(q.dot(u), q.dot(w))
         });
-        let r = circle3_radius_below(flat).max(min_r);
+        let r = math::max(circle3_radius_below(flat), min_r);
         // The same products as `fit_with`'s, so never more than its extent.
         let height = self.p[known.ends[1]].dot(a) - self.p[known.ends[0]].dot(a);
         let pi = std::f64::consts::PI;
         Some(match kind {
-            Axial::Cylinder => 2.0 * pi * r * r * (0.5 * height).max(min_r),
+            Axial::Cylinder => 2.0 * pi * r * r * math::max(0.5 * height, min_r),
             // The capsule's segment and caps span the extent: the segment is at least
             // `height - 2 r`, and the bound grows with r (its derivative is
             // `2 pi r (height - r)` below `r = height / 2`, then the ball's).
-            Axial::Capsule => pi * r * r * ((height - 2.0 * r).max(0.0) + 4.0 / 3.0 * r),
+            Axial::Capsule => pi * r * r * (math::max(height - 2.0 * r, 0.0) + 4.0 / 3.0 * r),
         })
     }
 }
@@ -302,7 +303,7 @@ fn fit_with(
         if x > zhi {
             ends[1] = i;
         }
-        (zlo, zhi) = (zlo.min(x), zhi.max(x));
+        (zlo, zhi) = (math::min(zlo, x), math::max(zhi, x));
     }
     // A cylinder along a direction tried before needs only the points' extent along it.
     let known = circles.get(a).filter(|_| kind == Axial::Cylinder);
@@ -314,21 +315,21 @@ fn fit_with(
             circles.of(a, flat, ends)
         }
     };
-    let big_r = circle.max(min_r);
+    let big_r = math::max(circle, min_r);
     let line = u * c2.x + w * c2.y;
     match kind {
         Axial::Cylinder => {
-            let half = (0.5 * (zhi - zlo)).max(min_r);
+            let half = math::max(0.5 * (zhi - zlo), min_r);
             BoundingVolume::cylinder(line + a * (0.5 * (zlo + zhi)), a, half, big_r)
         }
         Axial::Capsule if !search_radius => {
             let (mut z0, mut z1) = (f64::INFINITY, f64::NEG_INFINITY);
             for (q, &zi) in flat.iter().zip(z.iter()) {
-                let s = (big_r * big_r - (*q - c2).length_squared()).max(0.0).sqrt();
-                z0 = z0.min(zi + s);
-                z1 = z1.max(zi - s);
+                let s = math::max(big_r * big_r - (*q - c2).length_squared(), 0.0).sqrt();
+                z0 = math::min(z0, zi + s);
+                z1 = math::max(z1, zi - s);
             }
-            let half = (0.5 * (z1 - z0)).max(0.0);
+            let half = math::max(0.5 * (z1 - z0), 0.0);
             BoundingVolume::capsule(line + a * (0.5 * (z0 + z1)), a, half, big_r)
         }
         Axial::Capsule => {
@@ -337,20 +338,20 @@ fn fit_with(
             let segment = |r: f64| {
                 let (mut z0, mut z1) = (f64::INFINITY, f64::NEG_INFINITY);
                 for (&zi, &ri) in z.iter().zip(&rho2) {
-                    let s = (r * r - ri).max(0.0).sqrt();
-                    z0 = z0.min(zi + s);
-                    z1 = z1.max(zi - s);
+                    let s = math::max(r * r - ri, 0.0).sqrt();
+                    z0 = math::min(z0, zi + s);
+                    z1 = math::max(z1, zi - s);
                 }
                 (z0, z1)
             };
             let volume = |r: f64| {
                 let (z0, z1) = segment(r);
-                std::f64::consts::PI * r * r * ((z1 - z0).max(0.0) + 4.0 / 3.0 * r)
+                std::f64::consts::PI * r * r * (math::max(z1 - z0, 0.0) + 4.0 / 3.0 * r)
             };
             // Past the ball around the middle that holds every point, the segment is empty
             // and the volume only grows.
             let half = 0.5 * (zhi - zlo);
-            let r_max = (big_r * big_r + half * half).sqrt().max(big_r);
+            let r_max = math::max((big_r * big_r + half * half).sqrt(), big_r);
             let at = |i: usize| {
                 let f = i as f64 / (RADII - 1) as f64;
                 big_r + (r_max - big_r) * f * f
@@ -507,7 +508,7 @@ mod tests {
                         let t = golden * i as f64;
                         volume_along(&p, DVec3::new(r * t.cos(), r * t.sin(), z), shape)
                     })
-                    .fold(f64::INFINITY, f64::min);
+                    .fold(f64::INFINITY, math::min);
                 assert!(
                     v.volume() <= best * 1.02,
                     "seed {seed} {shape:?}: {} vs brute force {best}",

@@ -1,5 +1,6 @@
 //! The minimum enclosing ball (Welzl's algorithm, iterative with move-to-front order) and its
 //! planar twin, the minimum enclosing circle, which the capsule and cylinder fits use.
+use crate::math;
 use glam::{DVec2, DVec3};
 
 use crate::volume::BoundingVolume;
@@ -59,7 +60,7 @@ pub fn min_ball(points: &[DVec3], min_r: f64) -> BoundingVolume {
             }
         }
     }
-    BoundingVolume::sphere(b.0, b.1.sqrt().max(min_r)).scaled_to_contain(p)
+    BoundingVolume::sphere(b.0, math::max(b.1.sqrt(), min_r)).scaled_to_contain(p)
 }
 
 fn ball2(a: DVec3, b: DVec3) -> (DVec3, f64) {
@@ -231,7 +232,7 @@ fn enclosing(p: &[DVec2], (b, support): ((DVec2, f64), [usize; 3])) -> (DVec2, f
     let r2 = p
         .iter()
         .map(|&q| (q - b.0).length_squared())
-        .fold(b.1, f64::max);
+        .fold(b.1, math::max);
     (b.0, r2.sqrt(), support)
 }
 
@@ -264,7 +265,7 @@ pub fn circle3_radius_below(t: [DVec2; 3]) -> f64 {
     let cross = u.perp_dot(v).abs();
     let r = l.sqrt() * (s1 * s2).sqrt() / (2.0 * cross);
     if r.is_finite() {
-        r.max(half_diameter)
+        math::max(r, half_diameter)
     } else {
         half_diameter
     }
@@ -343,7 +344,7 @@ mod tests {
                 -DVec3::Z,
             ] {
                 let c = b.center + d * 1e-3 * r;
-                let need = p.iter().map(|&q| (q - c).length()).fold(0.0, f64::max);
+                let need = p.iter().map(|&q| (q - c).length()).fold(0.0, math::max);
                 assert!(need >= r * (1.0 - 1e-9), "seed {seed}: {need} < {r}");
             }
         }
@@ -407,7 +408,7 @@ mod tests {
         assert!(p.iter().all(|&q| (q - c).length() <= rad * (1.0 + 1e-12)));
         for d in [DVec2::X, DVec2::Y, -DVec2::X, -DVec2::Y] {
             let c2 = c + d * 1e-3 * rad;
-            let need = p.iter().map(|&q| (q - c2).length()).fold(0.0, f64::max);
+            let need = p.iter().map(|&q| (q - c2).length()).fold(0.0, math::max);
             assert!(need >= rad * (1.0 - 1e-9));
         }
     }

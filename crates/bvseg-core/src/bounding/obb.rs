@@ -388,7 +388,7 @@ fn refine(mut r: DMat3, mut vol: f64, v: &[DVec3], min_r: f64) -> (f64, DMat3) {
     // Moves of the current step size allowed before the support set is rebuilt.
     const BUDGET: f64 = 6.0;
     let centre = v.iter().copied().sum::<DVec3>() / v.len().max(1) as f64;
-    let reach = v.iter().map(|p| p.distance(centre)).fold(0.0f64, f64::max);
+    let reach = v.iter().map(|p| p.distance(centre)).fold(0.0f64, math::max);
     let mut support: Vec<DVec3> = Vec::with_capacity(v.len());
     // Rotation since the support set was built, and how much it allows.
     let (mut turned, mut allowed) = (0.0, -1.0);
@@ -448,7 +448,7 @@ pub(crate) mod tests {
     use glam::{DQuat, EulerRot};
 
     fn gaussian(rng: &mut Rng) -> f64 {
-        let (a, b) = (rng.next_f64().max(1e-300), rng.next_f64());
+        let (a, b) = (math::max(rng.next_f64(), 1e-300), rng.next_f64());
         (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
     }
 
@@ -556,7 +556,7 @@ pub(crate) mod tests {
                     }
                 }
             }
-            best = best.min(fv);
+            best = math::min(best, fv);
         }
         8.0 * best
     }
@@ -574,7 +574,7 @@ pub(crate) mod tests {
             let b = min_obb(&pts, 1e-12);
             let ratio = b.volume() / brute_force(&pts, &mut rng);
             eprintln!("kind {kind} seed {seed}: min_obb / brute force = {ratio:.5}");
-            worst = worst.max(ratio);
+            worst = math::max(worst, ratio);
         }
         assert!(worst < 1.01, "{worst}");
     }

@@ -8,6 +8,7 @@
 //! stays within the limit. Every plane supports the hull, so the result always encloses the
 //! points. A clip that would put a new vertex within [`MIN_EDGE`] of the diameter of an
 //! existing one is skipped, so no sliver face or needle edge appears.
+use crate::math;
 use std::cmp::{Ordering, Reverse};
 use std::collections::{BTreeMap, BinaryHeap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -100,7 +101,7 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
                 .vertices
                 .iter()
                 .map(|&v| n.dot(v) - d)
-                .fold(f64::NEG_INFINITY, f64::max);
+                .fold(f64::NEG_INFINITY, math::max);
             (out <= 1e-9 * diameter).then_some((n, d))
         })
         .collect();
@@ -113,7 +114,7 @@ pub fn few_vertex_hull(points: &[DVec3], max_vertices: usize, min_r: f64) -> Bou
         verts
             .iter()
             .map(|&v| n.dot(v) - d)
-            .fold(f64::NEG_INFINITY, f64::max)
+            .fold(f64::NEG_INFINITY, math::max)
     };
     let mut verts = vertices(&faces, diameter);
     let mut heap: BinaryHeap<(Ordered, Reverse<usize>)> = (0..planes.len())

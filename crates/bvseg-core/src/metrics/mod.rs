@@ -30,7 +30,7 @@ pub use surface::SurfaceDistance;
 
 use glam::DVec3;
 
-use crate::math::{ceil_i64, floor_i64};
+use crate::math::{self, ceil_i64, floor_i64};
 use crate::sampling::{Grid, InsideRuns};
 use crate::volume::{BoundingVolume, PlanesAlong, Shape};
 
@@ -109,7 +109,7 @@ impl<'a> Along<'a> {
                 self.cylinder(a)
                     .into_iter()
                     .chain(ends.into_iter().flatten())
-                    .reduce(|x, y| (x.0.min(y.0), x.1.max(y.1)))
+                    .reduce(|x, y| (math::min(x.0, y.0), math::max(x.1, y.1)))
             }
             Shape::Hull => self.planes.as_ref().and_then(|p| p.interval(a)),
         }
@@ -119,7 +119,7 @@ impl<'a> Along<'a> {
     fn cylinder(&self, a: DVec3) -> Option<(f64, f64)> {
         let (l0, h0) = quadratic(a, self.b, ACROSS, self.bb)?;
         let (l1, h1) = slabs(a, self.b, [false, false, true])?;
-        let (lo, hi) = (l0.max(l1), h0.min(h1));
+        let (lo, hi) = (math::max(l0, l1), math::min(h0, h1));
         (lo <= hi).then_some((lo, hi))
     }
 }
@@ -154,8 +154,8 @@ fn slabs(a: DVec3, b: DVec3, which: [bool; 3]) -> Option<(f64, f64)> {
         } else {
             let t0 = (-1.0 - a[j]) / b[j];
             let t1 = (1.0 - a[j]) / b[j];
-            lo = lo.max(t0.min(t1));
-            hi = hi.min(t0.max(t1));
+            lo = math::max(lo, math::min(t0, t1));
+            hi = math::min(hi, math::max(t0, t1));
         }
     }
     (lo <= hi).then_some((lo, hi))
@@ -168,7 +168,7 @@ pub const LATTICES: f64 = 2.0;
 /// both lattices.
 #[inline]
 pub fn relative(cells: usize, n: f64) -> f64 {
-    cells as f64 / (LATTICES * n.max(1.0))
+    cells as f64 / (LATTICES * math::max(n, 1.0))
 }
 
 /// Call `f(i, j, k)` for every cell of the sampling lattice whose centre lies in `v`.
@@ -309,7 +309,7 @@ pub fn outside_from_cells(per: &[&Cells], counts: &[f64]) -> Outside {
         .zip(counts)
         .map(|(c, &n)| relative(c.len(), n))
         .collect();
-    let mov = ov.iter().copied().fold(0.0, f64::max);
+    let mov = ov.iter().copied().fold(0.0, math::max);
     let union = distinct(per, false) + distinct(per, true);
     Outside {
         tov: relative(union, total),
@@ -457,7 +457,7 @@ mod tests {
             let p = v.center + DVec3::new(0.3, -0.2, 0.5);
             let mut big = v.clone();
             big.radii *= 2.0;
-            assert!((big.gauge(p) * 2.0 - v.gauge(p)).abs() < 1e-9 * v.gauge(p).max(1.0));
+            assert!((big.gauge(p) * 2.0 - v.gauge(p)).abs() < 1e-9 * math::max(v.gauge(p), 1.0));
             let g2 = v.clone().grown(0.1);
             for t in [DVec3::X, DVec3::Y, DVec3::Z, -DVec3::ONE.normalize()] {
                 // A point 0.1 out from the boundary along a ray from the centre is in the

@@ -11,6 +11,7 @@
 //! with its fit. The boundary is sampled (a Fibonacci lattice on the ellipsoid, a grid on the
 //! box's faces, corners included) and the best samples refined by a pattern search, so the
 //! peak is found to a small fraction of the sample spacing.
+use crate::math;
 use glam::DVec3;
 
 use super::surface::SurfaceDistance;
@@ -98,7 +99,7 @@ pub fn protrusion_bound(
         points
             .iter()
             .map(|&q| (q - p).length_squared())
-            .fold(f64::INFINITY, f64::min)
+            .fold(f64::INFINITY, math::min)
             .sqrt()
     };
     protrusion_by(v, grid, others, |p, _| Some(nearest(p))).unwrap_or(0.0)
@@ -149,7 +150,7 @@ fn protrusion_by(
     scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let mut best = scored.first().map_or(0.0, |s| s.0);
     for &(d, i) in scored.iter().take(REFINED) {
-        best = best.max(refine(v, samples[i], d, step, &value));
+        best = math::max(best, refine(v, samples[i], d, step, &value));
     }
     (!gave_up.get()).then_some(best)
 }
@@ -163,7 +164,7 @@ fn boundary_samples(v: &BoundingVolume) -> (Vec<Local>, f64) {
             let pts = (0..n)
                 .map(|i| {
                     let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let r = math::max(1.0 - z * z, 0.0).sqrt();
                     let (s, c) = crate::math::sin_cos(golden * i as f64);
                     DVec3::new(r * c, r * s, z)
                 })
@@ -248,10 +249,13 @@ fn hull_samples(v: &BoundingVolume) -> (Vec<Local>, f64) {
             0.5 * (b - a).cross(c - a).length()
         })
         .sum();
-    let spacing = (total / HULL_SAMPLES as f64).sqrt().max(1e-9);
+    let spacing = math::max((total / HULL_SAMPLES as f64).sqrt(), 1e-9);
     for t in p.triangles() {
         let [a, b, c] = t.map(|i| p.vertices()[i as usize]);
-        let longest = (b - a).length().max((c - a).length()).max((c - b).length());
+        let longest = math::max(
+            math::max((b - a).length(), (c - a).length()),
+            (c - b).length(),
+        );
         let m = ((longest / spacing).ceil() as usize).clamp(1, 64);
         for i in 0..=m {
             for j in 0..=m - i {
@@ -454,7 +458,7 @@ mod tests {
             let all = protrusion(&v, &surface, &grid, &[]);
             let (run, _) = protrusion_capped(&v, &surface, &grid, &[], &[], u64::MAX);
             assert!(
-                (run - all).abs() <= 1e-12 * all.max(1.0),
+                (run - all).abs() <= 1e-12 * math::max(all, 1.0),
                 "{shape:?}: {run} vs {all}"
             );
             positive += usize::from(all > 0.0);

@@ -4,6 +4,7 @@
 //! A tree rather than a grid of triangle buckets: a hostile mesh of a few huge triangles would
 //! put each of them in every bucket. The build is `O(n log n)` whatever the triangles' sizes,
 //! and deterministic (ties between centroids are broken by index).
+use crate::math;
 use glam::DVec3;
 
 use crate::Mesh;
@@ -128,7 +129,7 @@ impl SurfaceDistance {
         let mut visited = 0usize;
         if let Some(t) = self.tris.get(near.get() as usize) {
             visited += 1;
-            best = best.min(distance_squared_to(p, t));
+            best = math::min(best, distance_squared_to(p, t));
             if best <= stop {
                 return (best, visited);
             }
@@ -302,7 +303,7 @@ mod tests {
     fn brute(mesh: &Mesh, p: DVec3) -> f64 {
         (0..mesh.triangles().len())
             .map(|t| (closest_on_triangle(p, &mesh.corners(t)) - p).length_squared())
-            .fold(f64::INFINITY, f64::min)
+            .fold(f64::INFINITY, math::min)
             .sqrt()
     }
 
@@ -326,7 +327,10 @@ mod tests {
             );
             // Equal up to rounding: the tree stores each face's corners in another order.
             let (t, b) = (tree.distance(p), brute(&mesh, p));
-            assert!((t - b).abs() <= 1e-12 * b.max(1.0), "{p}: {t} vs {b}");
+            assert!(
+                (t - b).abs() <= 1e-12 * math::max(b, 1.0),
+                "{p}: {t} vs {b}"
+            );
         }
     }
 

@@ -1,5 +1,6 @@
 //! The final step: polish the partition (tighten, relieve the worst part, reshape), grow by
 //! the margin, and assemble the result with its hierarchy.
+use crate::math;
 use glam::DVec3;
 
 use super::{Context, State};
@@ -57,7 +58,7 @@ pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
     let mut cur = with_margin(ctx, cur);
     // The figure of the result: each part's share of the union's boundary, exactly.
     cur.pr = union_protrusions(ctx, &cur);
-    cur.protrusion = cur.pr.iter().copied().fold(0.0, f64::max);
+    cur.protrusion = cur.pr.iter().copied().fold(0.0, math::max);
     (cur, cut)
 }
 
@@ -113,7 +114,7 @@ fn reshaped(ctx: &Context, cur: State) -> State {
         .collect();
     let reach = ctx.fitter.protrusions_of(&ctx.solid, list, &[]);
     for (&i, r) in changed.iter().zip(reach) {
-        if r > cur.pr[i].max(bound) {
+        if r > math::max(cur.pr[i], bound) {
             volumes[i] = cur.volumes[i].clone();
             cells[i] = cur.fits[i].outside.clone();
         }
@@ -193,7 +194,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             tov: cur.tov,
             mov: cur.mov,
             protrusion: cur.protrusion,
-            protrusion_rel: cur.protrusion / ctx.diagonal.max(f64::MIN_POSITIVE),
+            protrusion_rel: cur.protrusion / math::max(ctx.diagonal, f64::MIN_POSITIVE),
             diagonal: ctx.diagonal,
             samples: ctx.solid.len(),
         },

@@ -1,5 +1,6 @@
 //! A partition with the output volumes of its parts and its figures: what each step of the
 //! run produces and the next one judges.
+use crate::math;
 use std::sync::Arc;
 
 use super::Context;
@@ -47,7 +48,7 @@ impl State {
             tov: o.tov,
             mov: o.mov,
             ov: o.ov,
-            protrusion: pr.iter().copied().fold(0.0, f64::max),
+            protrusion: pr.iter().copied().fold(0.0, math::max),
             pr,
         }
     }

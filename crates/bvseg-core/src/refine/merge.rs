@@ -7,6 +7,7 @@
 //! those whose volumes' boxes overlap (separate pieces of the solid, such as a teddy's eyes,
 //! touch nothing); a merge must leave the part connected within each piece of the solid, and
 //! with a rig, both parts must be bound to the same bone.
+use crate::math;
 use glam::DVec3;
 
 use super::{Figures, Tolerances};
@@ -110,7 +111,7 @@ pub fn options(ctx: &mut Context, cur: &State, pairs: &[(u32, u32)]) -> (Vec<Mer
             let mov = (0..cur.ov.len())
                 .filter(|&i| i != a && i != b)
                 .map(|i| cur.ov[i])
-                .fold(ov, f64::max);
+                .fold(ov, math::max);
             out.push(MergeOption { tov, mov, a, b });
         }
     }
@@ -160,7 +161,7 @@ fn first_within(
     tol: Tolerances,
     mut protrusion: impl FnMut(usize, usize) -> f64,
 ) -> Option<(usize, usize)> {
-    let bound = cur.protrusion.max(tol.protrusion);
+    let bound = math::max(cur.protrusion, tol.protrusion);
     order
         .iter()
         .find(|o| protrusion(o.a, o.b) <= bound)
@@ -204,7 +205,7 @@ fn protrusion_after<'a>(ctx: &'a Context, cur: &'a State) -> impl FnMut(usize, u
         (0..cur.pr.len())
             .filter(|&i| i != a && i != b)
             .map(|i| cur.pr[i])
-            .fold(merged, f64::max)
+            .fold(merged, math::max)
     }
 }
 

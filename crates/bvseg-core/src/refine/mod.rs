@@ -13,6 +13,7 @@ pub(crate) mod merge;
 pub(crate) mod patience;
 pub(crate) mod split;
 
+use crate::math;
 use crate::Params;
 
 /// The figures the tolerances judge.
@@ -84,7 +85,9 @@ impl Tolerances {
 
     /// How far parts of protrusions `pr` reach beyond the tolerance, summed.
     pub fn over(&self, pr: &[f64]) -> f64 {
-        pr.iter().map(|&p| (p - self.protrusion).max(0.0)).sum()
+        pr.iter()
+            .map(|&p| math::max(p - self.protrusion, 0.0))
+            .sum()
     }
 
     /// Whether TOV is out of tolerance (the first thing refinement fixes).

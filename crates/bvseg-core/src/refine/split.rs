@@ -8,6 +8,7 @@
 //! try fails, [`keeps_first_anyway`] decides whether refinement goes on from the first.
 use super::{Aim, Figures, Tolerances};
 use crate::initialization::split;
+use crate::math;
 use crate::optimization::optimize;
 use crate::parallel::{join, threads};
 use crate::partition::{Partition, Solid};
@@ -51,7 +52,7 @@ pub fn keeps(aim: Aim, cur: Figures, cand: Figures, tol: Tolerances) -> bool {
         Aim::Mov => {
             cand.mov < cur.mov
                 && cand.tov < tol.tov
-                && cand.protrusion <= cur.protrusion.max(tol.protrusion)
+                && cand.protrusion <= math::max(cur.protrusion, tol.protrusion)
         }
     }
 }

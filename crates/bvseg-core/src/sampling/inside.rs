@@ -52,6 +52,7 @@
 //! gives two equal votes, so the rule is a majority over axes, and a tie leans inside so
 //! that a hole does not punch a tunnel through the solid).
 
+use crate::math;
 use glam::DVec3;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
@@ -73,7 +74,7 @@ const COORD_LIMIT: f64 = 1e15;
 /// does (stacked copies, a fan of huge slivers), and the run is refused in a fraction of a
 /// second instead of taking minutes.
 pub fn column_budget(cells: f64) -> u64 {
-    (50e6 + SCANS_PER_CELL * cells.max(0.0)).min(1e18) as u64
+    math::min(50e6 + SCANS_PER_CELL * math::max(cells, 0.0), 1e18) as u64
 }
 
 /// The scans per cell that [`column_budget`] allows.
@@ -288,8 +289,8 @@ impl Pass {
     /// it meets the lattice.
     #[inline]
     fn span(&self, p: &[[f64; 3]; 3], ax: usize) -> Option<(usize, usize)> {
-        let lo = p[0][ax].min(p[1][ax]).min(p[2][ax]);
-        let hi = p[0][ax].max(p[1][ax]).max(p[2][ax]);
+        let lo = math::min(math::min(p[0][ax], p[1][ax]), p[2][ax]);
+        let hi = math::max(math::max(p[0][ax], p[1][ax]), p[2][ax]);
         // The displaced centre sits just above an integer, so a column at the upper
         // bound is never covered; keeping it is harmless, the exact test rejects it.
         let first = ceil_i(lo).max(0);
@@ -329,8 +330,8 @@ impl Pass {
         };
         let big = p
             .iter()
-            .map(|q| q[u].abs().max(q[v].abs()))
-            .fold(0.0, f64::max);
+            .map(|q| math::max(q[u].abs(), q[v].abs()))
+            .fold(0.0, math::max);
         let margin = 1.0 + 1e-12 * big;
         for iv in v0..=v1 {
             let y = iv as f64;
@@ -341,13 +342,13 @@ impl Pass {
                     continue;
                 }
                 let x = if a[v] == b[v] {
-                    lo = lo.min(a[u].min(b[u]));
-                    a[u].max(b[u])
+                    lo = math::min(lo, math::min(a[u], b[u]));
+                    math::max(a[u], b[u])
                 } else {
                     a[u] + (y - a[v]) * ((b[u] - a[u]) / (b[v] - a[v]))
                 };
-                lo = lo.min(x);
-                hi = hi.max(x);
+                lo = math::min(lo, x);
+                hi = math::max(hi, x);
             }
             let (first, last) = if lo <= hi {
                 (
@@ -406,8 +407,8 @@ impl Pass {
         // coordinate.
         let z = [p[0][a], p[1][a], p[2][a]];
         let sum = w[0] + w[1] + w[2];
-        let zmin = z[0].min(z[1]).min(z[2]);
-        let zmax = z[0].max(z[1]).max(z[2]);
+        let zmin = math::min(math::min(z[0], z[1]), z[2]);
+        let zmax = math::max(math::max(z[0], z[1]), z[2]);
         let mut t = if sum != 0.0 {
             z[0] + (w[1] * (z[1] - z[0]) + w[2] * (z[2] - z[0])) / sum
         } else {

@@ -7,6 +7,7 @@
 //! per-shape inside test. A hull carries its polyhedron in those local coordinates.
 mod polytope;
 
+use crate::math;
 use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
@@ -180,7 +181,7 @@ impl BoundingVolume {
 
     /// A capsule around the segment `center +- half_length * axis` (`axis` a unit vector).
     pub fn capsule(center: DVec3, axis: DVec3, half_length: f64, radius: f64) -> Self {
-        let h = half_length.max(MIN_CAPSULE_LENGTH * radius);
+        let h = math::max(half_length, MIN_CAPSULE_LENGTH * radius);
         Self::frame(
             Shape::Capsule,
             center,
@@ -209,7 +210,7 @@ impl BoundingVolume {
         let scale = finite
             .iter()
             .map(|&p| (p - mean).length())
-            .fold(0.0f64, f64::max);
+            .fold(0.0f64, math::max);
         if !(scale > 0.0 && scale.is_finite()) {
             return None;
         }
@@ -337,7 +338,7 @@ impl BoundingVolume {
         match self.shape {
             Shape::Ellipsoid | Shape::Sphere => t.length(),
             Shape::Obb => t.abs().max_element(),
-            Shape::Cylinder => t.truncate().length().max(t.z.abs()),
+            Shape::Cylinder => math::max(t.truncate().length(), t.z.abs()),
             Shape::Capsule => {
                 // In units of the radius: rho from the axis, zeta along it, l the half-length.
                 let l = self.capsule_ratio();
@@ -349,7 +350,7 @@ impl BoundingVolume {
                     // The scale s with (zeta - s l)^2 + rho^2 = s^2 (the point on the scaled
                     // end cap), in the form that stays stable for every l.
                     let q = zeta * zeta + rho * rho;
-                    q / (zeta * l + (q - rho * rho * l * l).max(0.0).sqrt())
+                    q / (zeta * l + math::max(q - rho * rho * l * l, 0.0).sqrt())
                 }
             }
             Shape::Hull => self.polytope().map_or(f64::INFINITY, |p| p.gauge(t)),
@@ -368,7 +369,7 @@ impl BoundingVolume {
             }
             Shape::Capsule => {
                 let l = self.capsule_ratio();
-                let e = (t.z.abs() * l - l).max(0.0);
+                let e = math::max(t.z.abs() * l - l, 0.0);
                 t.truncate().length_squared() + e * e <= 1.0 + 1e-9
             }
             Shape::Hull => self.gauge_local(t) <= 1.0 + 1e-9,
@@ -464,7 +465,7 @@ impl BoundingVolume {
             }
             Shape::Cylinder => DVec3::from_array(std::array::from_fn(|i| {
                 let c = row(i).z;
-                r.z * c.abs() + r.x * (1.0 - c * c).max(0.0).sqrt()
+                r.z * c.abs() + r.x * math::max(1.0 - c * c, 0.0).sqrt()
             })),
             Shape::Capsule => {
                 DVec3::from_array(std::array::from_fn(|i| r.z * row(i).z.abs() + r.x))
@@ -489,7 +490,7 @@ impl BoundingVolume {
         let g = points
             .into_iter()
             .map(|p| self.gauge(p))
-            .fold(0.0f64, f64::max);
+            .fold(0.0f64, math::max);
         if g > 1.0 {
             self.radii *= g * (1.0 + 1e-12);
         }

@@ -1,4 +1,5 @@
 //! The convex polyhedron of a hull volume, in the volume's local coordinates.
+use crate::math;
 use glam::DVec3;
 
 use crate::bounding::hull::convex_hull;
@@ -27,7 +28,7 @@ impl Polytope {
             .vertices
             .iter()
             .map(|v| v.length())
-            .fold(0.0f64, f64::max);
+            .fold(0.0f64, math::max);
         let mut planes = Vec::with_capacity(hull.faces.len());
         for f in 0..hull.faces.len() {
             let (n, area) = hull.face_normal_area(f);
@@ -73,7 +74,7 @@ impl Polytope {
         self.planes
             .iter()
             .map(|&(n, d)| n.dot(t) / d)
-            .fold(f64::NEG_INFINITY, f64::max)
+            .fold(f64::NEG_INFINITY, math::max)
     }
 
     /// The volume (the origin is inside, so every tetrahedron to it counts positively).
@@ -92,7 +93,7 @@ impl Polytope {
         self.planes
             .iter()
             .map(|p| p.1)
-            .fold(f64::INFINITY, f64::min)
+            .fold(f64::INFINITY, math::min)
     }
 
     /// The range of `k` with `a + k b` inside, or `None`.
@@ -126,9 +127,9 @@ impl PlanesAlong {
             } else {
                 let k = (d - na) / nb;
                 if nb > 0.0 {
-                    hi = hi.min(k);
+                    hi = math::min(hi, k);
                 } else {
-                    lo = lo.max(k);
+                    lo = math::max(lo, k);
                 }
                 // The range only narrows: once empty, it stays so.
                 if lo > hi {

@@ -1,6 +1,7 @@
 //! The cheap tests that spare most points the exact ones: an ellipsoid inside the initial
 //! polytope, whose points are dropped at once, and a map from directions to the faces a ray
 //! may leave through, so that each other point is tested against a few faces, not all.
+use crate::math;
 use glam::{DMat3, DVec3};
 
 /// An ellipsoid inside a polytope: centred at `c`, shaped like the covariance of the polytope's
@@ -43,7 +44,7 @@ impl InnerEllipsoid {
             if t.is_nan() || t <= 0.0 {
                 return unusable;
             }
-            s2 = s2.min(t * t);
+            s2 = math::min(s2, t * t);
         }
         // A relative margin far above the rounding of `contains`.
         Self {
@@ -91,7 +92,7 @@ impl DirMap {
             let t = t.map(|v| v - c);
             // A face whose plane passes (nearly) through `c` would project to infinity.
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
-            let scale = t.iter().map(|v| v.length()).fold(0.0f64, f64::max);
+            let scale = t.iter().map(|v| v.length()).fold(0.0f64, math::max);
             let dist = n.dot(t[0]);
             let far_enough = dist.abs() > 1e-6 * n.length() * scale;
             if !far_enough {
@@ -123,8 +124,8 @@ impl DirMap {
                     let w = sg * p[m];
                     for (a, ax) in [(m + 1) % 3, (m + 2) % 3].into_iter().enumerate() {
                         let u = p[ax] / w;
-                        lo[a] = lo[a].min(u);
-                        hi[a] = hi[a].max(u);
+                        lo[a] = math::min(lo[a], u);
+                        hi[a] = math::max(hi[a], u);
                     }
                 }
                 if !(lo.iter().chain(&hi).all(|x| x.is_finite())) {

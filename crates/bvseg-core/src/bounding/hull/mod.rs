@@ -14,6 +14,7 @@
 mod cull;
 mod quickhull;
 
+use crate::math;
 use glam::DVec3;
 
 use quickhull::QuickHull;
@@ -52,7 +53,7 @@ impl Hull {
                 a.dot(b.cross(c))
             })
             .sum();
-        (six / 6.0).max(0.0)
+        math::max(six / 6.0, 0.0)
     }
 
     /// Unit outward normal and area of face `f` (zero normal for a degenerate triangle).

@@ -1,5 +1,6 @@
 //! Quickhull on the snapped points: the initial simplex, the point partition and the
 //! expansion, with the sign-exact orientation test that keeps its topology consistent.
+use crate::math;
 use glam::DVec3;
 
 use super::cull::{DirMap, InnerEllipsoid};
@@ -92,7 +93,7 @@ impl<'a> QuickHull<'a> {
         let face = &self.faces[f as usize];
         // `thr` is `eps |n|`, so this is the distance over `eps`.
         let d = face.far_d / face.thr;
-        (d.max(0.0).to_bits(), f)
+        (math::max(d, 0.0).to_bits(), f)
     }
 
     /// Exact test of `p` strictly above the plane of face `f`.

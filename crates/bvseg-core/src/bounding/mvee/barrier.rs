@@ -76,7 +76,7 @@ pub(super) fn barrier<const N: usize, const K: usize>(
         }
     }
     let w0 = invert(m0)?;
-    let smax = q.iter().map(|x| quad(&w0, x)).fold(0.0f64, f64::max);
+    let smax = q.iter().map(|x| quad(&w0, x)).fold(0.0, math::max);
     let mut h = pairs.map(|(a, b)| w0[a][b] / (smax * 1.05));
     // d/dh and d2/dh2 of -log det H: -tr(W E_p) and tr(W E_p W E_q), with E_p the
     // symmetric unit matrix of pair p = (a, b) (ones at (a, b) and (b, a)): with W symmetric,
@@ -252,12 +252,12 @@ pub(super) fn support_candidates<const N: usize>(
     };
     let om: Vec<f64> = act.iter().map(|&i| quad(&mi, &q[i])).collect();
     let n = N as f64;
-    let e = om.iter().fold(0.0f64, |a, &b| a.max(b)) - n;
+    let e = om.iter().fold(0.0, |a, &b| math::max(a, b)) - n;
     if !(e.is_finite() && e >= 0.0) {
         return vec![true; act.len()];
     }
     // A relative margin far above the rounding of `omega`.
     let bound =
-        n * (1.0 + e / 2.0 - (e * (4.0 + e - 4.0 / n)).max(0.0).sqrt() / 2.0) * (1.0 - 1e-9);
+        n * (1.0 + e / 2.0 - math::max(e * (4.0 + e - 4.0 / n), 0.0).sqrt() / 2.0) * (1.0 - 1e-9);
     om.iter().map(|&o| o >= bound).collect()
 }

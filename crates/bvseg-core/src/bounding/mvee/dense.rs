@@ -108,7 +108,7 @@ pub(super) fn invert<const N: usize>(mut m: [[f64; N]; N]) -> Option<[[f64; N]; 
     for (i, row) in inv.iter_mut().enumerate() {
         row[i] = 1.0;
     }
-    let scale = m.iter().flatten().fold(0.0f64, |a, &b| a.max(b.abs()));
+    let scale = m.iter().flatten().fold(0.0, |a, &b| math::max(a, b.abs()));
     for col in 0..N {
         let piv = (col..N).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
         let pv = m[piv][col].abs();

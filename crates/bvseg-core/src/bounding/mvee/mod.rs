@@ -129,7 +129,7 @@ fn fit(v: &[DVec3], points: &[DVec3], tol: f64, min_radius: f64) -> BoundingVolu
         for f in [0.0, 1.0, std::f64::consts::SQRT_2, 2.0, 4.0] {
             let pads: Vec<(usize, f64)> = dropped
                 .iter()
-                .map(|&k| (k, (f * frame.half[k]).max(min_r)))
+                .map(|&k| (k, math::max(f * frame.half[k], min_r)))
                 .collect();
             cands.push(e.to_volume(&frame, &pads, min_r));
         }
@@ -318,7 +318,7 @@ pub(crate) mod tests {
     fn gaussian(rng: &mut Rng) -> DVec3 {
         // Box–Muller, three coordinates.
         let mut g = || {
-            let (a, b) = (rng.next_f64().max(1e-300), rng.next_f64());
+            let (a, b) = (math::max(rng.next_f64(), 1e-300), rng.next_f64());
             (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
         };
         DVec3::new(g(), g(), g())

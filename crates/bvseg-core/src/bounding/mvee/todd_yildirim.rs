@@ -159,7 +159,7 @@ impl<const N: usize> WaTy<N> {
                 (j, (omj - n) / (n * (omj - 1.0)), false)
             } else {
                 // Away from the least needed point, at most down to a zero weight.
-                let t = (omk - n) / (n * (omk - 1.0).max(1e-300));
+                let t = (omk - n) / (n * math::max(omk - 1.0, 1e-300));
                 let tmin = -uk / (1.0 - uk);
                 if t <= tmin {
                     (k, tmin, true)
