@@ -3,7 +3,7 @@
 // Environment: BVSEG_DIST (the build to serve, default ../dist), PAGES=isolated or plain (only
 // that one), EXTRA (appended to the query, e.g. `&threads=1`), JSFLAGS (V8 flags, e.g.
 // `--liftoff-only`), CPU=1 (print the browser's CPU time per thread name over each page's
-// run, from /proc: the core's workers are `DedicatedWorker`, V8's background compilation
+// run (and each later run's), from /proc: the core's workers are `DedicatedWorker`, V8's background compilation
 // `ThreadPoolForeg...`, SwiftShader's drawing `Thread<NN>`), AGAIN=N (then click Run N more
 // times on the same page and print those runs too, and their median last: the browser has
 // compiled the module by then), CLICK=S (load the page without autorun, wait S seconds once its
@@ -114,9 +114,11 @@ for (let round = 0; round < rounds; round++) {
     console.log(`${name} (${threads} threads): run ${figures(j)}`);
     for (let again = 1; again <= Number(process.env.AGAIN || 0); again++) {
       await page.evaluate(() => { document.title = 'bvseg'; });
+      const before2 = process.env.CPU ? browserThreads() : null;
       await clickRun(page);
       const j2 = await result(page);
       later[name].push(j2.time_s);
+      if (before2) console.log(`  CPU (s): ${cpuSince(before2, browserThreads())}`);
       console.log(`  run ${again + 1} on the same page: ${figures(j2)}`);
     }
     await page.close();
