@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs the core's platform tests (the recorded bit digests of the fits) compiled for
+# Runs the core's platform tests (the recorded bit digests of the fits) and its `math::` tests
+# (where wasm takes its own path) compiled for
 # wasm32-wasip1, under Node.js's WASI, so that native and wasm are checked against the same
 # recorded bits. Needs rustup (adds the target) and node.
 set -euo pipefail

@@ -2,8 +2,8 @@
 # The core's speed in the browser's WebAssembly engine against native code, without a browser:
 # builds examples/repeat_runs.rs natively and for wasm32-wasip1 (with the page's SIMD flag),
 # runs both on one thread, alternating, ROUNDS times, and prints the median of the later runs
-# (the engine's optimised code) and their ratio. Node.js runs the module: it has the same
-# engine (V8) as Chromium. Needs rustup (adds the target) and node.
+# (the engine's optimised code) and their ratio. Node.js runs the module: it has Chromium's
+# engine (V8), in an older version. Needs rustup (adds the target) and node.
 #
 #   scripts/wasm_vs_native.sh [MESH] [ROUNDS]     (default: the bundled spot, 3 rounds)
 set -euo pipefail
