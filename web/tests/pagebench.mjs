@@ -7,7 +7,9 @@
 // `ThreadPoolForeg...`, SwiftShader's drawing `Thread<NN>`), AGAIN=N (then click Run N more
 // times on the same page and print those runs too, and their median last: the browser has
 // compiled the module by then), CLICK=S (load the page without autorun, wait S seconds once its
-// Run button is drawn, as a user would, then click Run and time that run).
+// Run button is drawn, as a user would, then click Run and time that run). Each run prints
+// its core time (the figure the medians take) and when the page showed its result: that many
+// seconds after the click, or after the navigation for a first run with autorun.
 import { createServer } from 'node:http';
 import { mkdtempSync, readFileSync, readdirSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -80,6 +82,19 @@ const context = await chromium.launchPersistentContext(profile, {
     '--disable-component-update', '--disable-sync', '--no-first-run', '--enable-unsafe-swiftshader',
     ...(process.env.JSFLAGS ? [`--js-flags=${process.env.JSFLAGS}`] : [])],
 });
+// When the page shows a run's end (its title changes) and when a click last ended (pointer up,
+// when egui takes the click), on the page's clock: what the user waits, from the click or from
+// the page's navigation (autorun), to the result on the screen.
+await context.addInitScript(() => {
+  addEventListener('pointerup', () => { window.__clickAt = performance.now(); }, true);
+  new MutationObserver(() => {
+    if (document.title.startsWith('bvseg: ')) window.__shownAt ??= performance.now();
+  }).observe(document, { subtree: true, childList: true, characterData: true });
+});
+/** Seconds from the last click (or, with none, the navigation) to the result on the screen. */
+async function shown(page) {
+  return page.evaluate(() => (window.__shownAt - (window.__clickAt ?? 0)) / 1000);
+}
 /** Waits for the end of the page's run and returns its summary. */
 async function result(page) {
   await page.waitForFunction(() => document.title.startsWith('bvseg: '), null, { timeout: 300_000, polling: 100 });
@@ -90,11 +105,13 @@ async function clickRun(page) {
   const rect = await page.evaluate(() => Array.from(window.bvseg.widgetRect('Run') || []));
   await page.mouse.click(rect[0] + rect[2] / 2, rect[1] + rect[3] / 2);
 }
-const figures = (j) => `${j.time_s.toFixed(2)} s, core ${j.core_s.toFixed(2)} s, ${j.frames} frames, k ${j.k}`;
+const figures = (j, seen, click) => `${j.time_s.toFixed(2)} s, core ${j.core_s.toFixed(2)} s, ${j.frames} frames, k ${j.k}; shown ${seen.toFixed(2)} s after the ${click ? 'click' : 'navigation'}`;
 
 const results = { isolated: [], plain: [] };
 // Runs after the first on the same page (AGAIN): the browser has compiled the module by then.
 const later = { isolated: [], plain: [] };
+// From the click to the result on the screen, for runs started by a click.
+const seen = { isolated: [], plain: [] };
 const served = [['isolated', isolated], ['plain', plain]].filter(([name]) => pages.includes(name));
 for (let round = 0; round < rounds; round++) {
   for (const [name, origin] of served) {
@@ -111,15 +128,19 @@ for (let round = 0; round < rounds; round++) {
     if (before) console.log(`  CPU (s): ${cpuSince(before, browserThreads())}`);
     const threads = await page.evaluate(() => window.bvseg?.threads);
     results[name].push(j.time_s);
-    console.log(`${name} (${threads} threads): run ${figures(j)}`);
+    const s1seen = await shown(page);
+    if (click) seen[name].push(s1seen);
+    console.log(`${name} (${threads} threads): run ${figures(j, s1seen, click)}`);
     for (let again = 1; again <= Number(process.env.AGAIN || 0); again++) {
-      await page.evaluate(() => { document.title = 'bvseg'; });
+      await page.evaluate(() => { document.title = 'bvseg'; window.__shownAt = undefined; });
       const before2 = process.env.CPU ? browserThreads() : null;
       await clickRun(page);
       const j2 = await result(page);
       later[name].push(j2.time_s);
+      const s2seen = await shown(page);
+      seen[name].push(s2seen);
       if (before2) console.log(`  CPU (s): ${cpuSince(before2, browserThreads())}`);
-      console.log(`  run ${again + 1} on the same page: ${figures(j2)}`);
+      console.log(`  run ${again + 1} on the same page: ${figures(j2, s2seen, true)}`);
     }
     await page.close();
   }
@@ -130,6 +151,7 @@ const medians = (label, times) =>
   console.log(`${label}: ${pages.map((p) => `${p} ${median(times[p]).toFixed(2)} s`).join(', ')}`);
 medians('median run', results);
 if (later[pages[0]].length) medians('median later run', later);
+if (seen[pages[0]].length) medians('median click to result shown', seen);
 await context.close();
 s1.close();
 s2.close();

@@ -29,6 +29,11 @@ pub const NEWS_INTERVAL: Duration = Duration::from_millis(500);
 /// hundredths.
 pub const SOFTWARE_NEWS_INTERVAL: Duration = Duration::from_secs(2);
 
+/// How often the app looks, between frames, whether a run in the background has ended (see
+/// [`crate::platform::repaint_when_set`]): a look costs a timer and an atomic load, whereas
+/// waiting for the next news frame showed a run's end up to [`SOFTWARE_NEWS_INTERVAL`] late.
+pub const END_WATCH_INTERVAL: Duration = Duration::from_millis(20);
+
 /// How often a frame takes the news of a run in the background, drawn by a software renderer
 /// or not.
 pub fn news_interval(software_renderer: bool) -> Duration {

@@ -1,7 +1,14 @@
 //! What differs between the desktop and the browser: how a finished run is reported, how a
-//! file is picked, and how a result leaves the app.
+//! file is picked, how a result leaves the app, and how the end of a run in the background
+//! wakes the app.
 use std::cell::RefCell;
 use std::rc::Rc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use eframe::egui;
+
+use crate::budget::END_WATCH_INTERVAL;
 
 /// What the app tells its host when a run ends.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,6 +61,31 @@ impl Inbox {
 #[cfg(target_arch = "wasm32")]
 pub use web::{download, pick_file, read_dropped, widget_rect};
 
+/// Asks `ctx` for a frame as soon as `ended` is set (a run in the background has ended, see
+/// [`crate::session::Session::take_end_signal`]), looking every [`END_WATCH_INTERVAL`]; stops
+/// then, or once nobody else holds the flag (the run and its session are gone). Without it the
+/// end would show only at the next news frame. The run's thread cannot ask for the frame
+/// itself: in the page it is a Web Worker, and eframe's repaint request reads the page's
+/// clock, which only the main thread has. So the page's main thread looks, on a timer;
+/// natively, a thread of its own.
+pub fn repaint_when_set(ended: Arc<AtomicBool>, ctx: egui::Context) {
+    let look = move || {
+        if ended.load(Ordering::Acquire) {
+            ctx.request_repaint();
+            return false;
+        }
+        Arc::strong_count(&ended) > 1
+    };
+    #[cfg(target_arch = "wasm32")]
+    web::every(END_WATCH_INTERVAL, look);
+    #[cfg(not(target_arch = "wasm32"))]
+    std::thread::spawn(move || {
+        while look() {
+            std::thread::sleep(END_WATCH_INTERVAL);
+        }
+    });
+}
+
 /// Remembers where the widget called `label` was drawn in this frame. eframe's web backend has
 /// no accessibility tree, so a browser test finds the widgets it clicks through this record
 /// (natively, AccessKit does that and this does nothing).
@@ -91,6 +123,24 @@ mod web {
     /// of the canvas.
     pub fn widget_rect(label: &str) -> Option<[f32; 4]> {
         WIDGETS.with(|w| w.borrow().iter().find(|(l, _)| l == label).map(|e| e.1))
+    }
+
+    /// Calls `look` on the page's main thread every `interval` while it returns `true`.
+    pub fn every(interval: web_time::Duration, mut look: impl FnMut() -> bool + 'static) {
+        let ms = i32::try_from(interval.as_millis()).unwrap_or(i32::MAX);
+        wasm_bindgen_futures::spawn_local(async move {
+            while look() {
+                let wait = js_sys::Promise::new(&mut |resolve, _| {
+                    if let Some(w) = web_sys::window() {
+                        let _ =
+                            w.set_timeout_with_callback_and_timeout_and_arguments_0(&resolve, ms);
+                    }
+                });
+                if wasm_bindgen_futures::JsFuture::from(wait).await.is_err() {
+                    return;
+                }
+            }
+        });
     }
 
     fn js_err(e: JsValue) -> String {
@@ -181,5 +231,52 @@ mod web {
 
     fn log_error(msg: &str) {
         web_sys::console::error_1(&msg.into());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicUsize;
+    use std::time::{Duration, Instant};
+
+    use super::*;
+
+    #[test]
+    fn the_end_of_a_run_asks_for_a_frame_at_once() {
+        let ctx = egui::Context::default();
+        let requests = Arc::new(AtomicUsize::new(0));
+        let counted = requests.clone();
+        ctx.set_request_repaint_callback(move |_| {
+            counted.fetch_add(1, Ordering::SeqCst);
+        });
+        let ended = Arc::new(AtomicBool::new(false));
+        repaint_when_set(ended.clone(), ctx);
+        std::thread::sleep(5 * END_WATCH_INTERVAL);
+        assert_eq!(requests.load(Ordering::SeqCst), 0, "asked before the end");
+        ended.store(true, Ordering::Release);
+        let t0 = Instant::now();
+        while requests.load(Ordering::SeqCst) == 0 {
+            assert!(t0.elapsed() < Duration::from_secs(10), "no frame asked for");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        // It stops looking once it has asked: the watcher's copy of the flag goes.
+        while Arc::strong_count(&ended) > 1 {
+            assert!(t0.elapsed() < Duration::from_secs(10), "still looking");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        assert_eq!(requests.load(Ordering::SeqCst), 1);
+    }
+
+    #[test]
+    fn a_run_that_is_gone_is_no_longer_watched() {
+        let ended = Arc::new(AtomicBool::new(false));
+        let watched = Arc::downgrade(&ended);
+        repaint_when_set(ended, egui::Context::default());
+        // Only the watcher holds the flag now: it lets go without asking for anything.
+        let t0 = Instant::now();
+        while watched.strong_count() > 0 {
+            assert!(t0.elapsed() < Duration::from_secs(10), "still looking");
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 }

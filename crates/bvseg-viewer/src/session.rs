@@ -9,7 +9,7 @@
 //!
 //! Cancelling is dropping the session. Every step leaves a [`Snapshot`], so the history can be
 //! stepped back through after (and during) the run.
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use bvseg_core::{
@@ -69,6 +69,8 @@ enum Stage {
 struct Inbox {
     cancel: Cancel,
     mail: Mutex<Mail>,
+    /// Set once the run's end is in the mail (see [`Session::take_end_signal`]).
+    ended: Arc<AtomicBool>,
 }
 
 /// The background run's news since the last collection.
@@ -163,6 +165,8 @@ pub struct Session {
     calls: usize,
     started: Instant,
     wall: Option<Duration>,
+    /// A run in the background's end signal, until taken.
+    end_signal: Option<Arc<AtomicBool>>,
 }
 
 /// What [`Session::advance`] did.
@@ -205,6 +209,7 @@ impl Session {
             calls: 0,
             started: Instant::now(),
             wall: None,
+            end_signal: None,
         }
     }
 
@@ -214,7 +219,11 @@ impl Session {
         let inbox = Arc::new(Inbox::default());
         let mut s = Self::stepped(mesh.clone(), params.clone());
         s.stage = Stage::Background(inbox.clone());
-        rayon::spawn(move || run_in_background(&mesh, &params, &inbox));
+        s.end_signal = Some(inbox.ended.clone());
+        rayon::spawn(move || {
+            run_in_background(&mesh, &params, &inbox);
+            inbox.ended.store(true, Ordering::Release);
+        });
         s
     }
 
@@ -361,6 +370,22 @@ impl Session {
         let keep = (!self.params.hierarchy).then(|| Box::new(seg));
         self.stage = Stage::Done(Box::new(result), keep);
         Progress::Done
+    }
+
+    /// For a run in the background, once: a flag that its thread sets when the run has ended
+    /// (with a result, an error or by cancelling), after which [`Session::advance`] sees the
+    /// end. Between news frames nothing looks at the run, so the app hands this to
+    /// [`crate::platform::repaint_when_set`] to show the end as soon as it comes. `None` for a
+    /// stepped run, and after the first call.
+    pub fn take_end_signal(&mut self) -> Option<Arc<AtomicBool>> {
+        self.end_signal.take()
+    }
+
+    /// Whether a run in the background has ended, so that [`Session::advance`] would find the
+    /// end: the app then takes it at once instead of at the next news frame. `false` for a
+    /// stepped run.
+    pub fn has_ended(&self) -> bool {
+        matches!(&self.stage, Stage::Background(inbox) if inbox.ended.load(Ordering::Acquire))
     }
 
     /// Whether the run is going on in the background (see the module docs).
@@ -610,6 +635,39 @@ mod tests {
         assert!(bg.busy() > Duration::ZERO && bg.busy() <= bg.wall());
         // The hierarchy it went without is built on the main thread when asked.
         assert!(!bg.result_with_hierarchy().unwrap().hierarchy.is_empty());
+    }
+
+    #[test]
+    fn a_background_run_signals_its_end_once_the_end_can_be_collected() {
+        let _one = one_at_a_time();
+        let mesh = Arc::new(load_bundled(&BUNDLED[0]).unwrap());
+        let params = Params {
+            samples: 3000,
+            max_k: 8,
+            ..Params::default()
+        };
+        assert!(Session::stepped(mesh.clone(), params.clone())
+            .take_end_signal()
+            .is_none());
+        for params in [
+            params.clone(),
+            Params {
+                samples: 10,
+                ..params
+            },
+        ] {
+            let mut s = Session::in_background(mesh.clone(), params);
+            let ended = s.take_end_signal().unwrap();
+            assert!(s.take_end_signal().is_none(), "handed out once");
+            let t0 = Instant::now();
+            while !ended.load(Ordering::Acquire) {
+                assert!(t0.elapsed() < Duration::from_secs(120), "no end signal");
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            // The first look after the signal finds the end (the result, or the error).
+            assert!(s.has_ended());
+            assert_ne!(s.advance(Duration::ZERO), Progress::Running);
+        }
     }
 
     #[test]

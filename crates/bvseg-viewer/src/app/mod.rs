@@ -476,8 +476,9 @@ impl ViewerApp {
         let progress = if s.is_background() {
             // The run needs no frames; a frame that shows news costs the drawing of a few
             // (egui lays out again the panels that changed), so news is taken only so often.
+            // Its end is taken at once (see `platform::repaint_when_set`).
             let since = self.last_news.map(|l| t0.saturating_duration_since(l));
-            if let Some(since) = since.filter(|&d| d < self.news_interval) {
+            if let Some(since) = since.filter(|&d| d < self.news_interval && !s.has_ended()) {
                 self.next_frame = Some(self.news_interval - since);
                 return;
             }
@@ -524,6 +525,9 @@ impl ViewerApp {
     pub fn logic(&mut self, ctx: &egui::Context) {
         if std::mem::take(&mut self.pending_run) {
             self.run();
+        }
+        if let Some(ended) = self.session.as_mut().and_then(Session::take_end_signal) {
+            crate::platform::repaint_when_set(ended, ctx.clone());
         }
         self.advance();
         if let Some(p) = self.player.as_mut().filter(|p| p.playing()) {
@@ -746,5 +750,45 @@ mod tests {
                 "the next look waits out the interval: {next:?} after {waited:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_end_of_a_run_in_the_background_is_taken_without_waiting_for_news() {
+        let mut app = ViewerApp::new(StartOptions {
+            software_renderer: true,
+            ..StartOptions::default()
+        });
+        let mesh = app.model.as_ref().unwrap().mesh.clone();
+        let params = Params {
+            samples: 2000,
+            max_k: 4,
+            ..app.settings.params()
+        };
+        app.session = Some(Session::in_background(mesh, params));
+        app.status = Status::Running;
+        let ctx = egui::Context::default();
+        let asked = Arc::new(Mutex::new(None));
+        let noted = asked.clone();
+        ctx.set_request_repaint_callback(move |info| {
+            if info.delay.is_zero() {
+                noted.lock().unwrap().get_or_insert(Instant::now());
+            }
+        });
+        // The first frame takes the news, hands the end signal to a watcher, and waits for
+        // the next news (2 s with a software renderer).
+        app.logic(&ctx);
+        assert_eq!(app.status, Status::Running);
+        let t0 = Instant::now();
+        let asked_at = loop {
+            if let Some(at) = *asked.lock().unwrap() {
+                break at;
+            }
+            assert!(t0.elapsed() < Duration::from_secs(60), "no frame asked for");
+            std::thread::sleep(Duration::from_millis(1));
+        };
+        // That frame finds the end, however recent the last news.
+        app.last_news = Some(asked_at);
+        app.logic(&ctx);
+        assert_eq!(app.status, Status::Done);
     }
 }
