@@ -206,6 +206,8 @@ pub struct ViewerApp {
     last_news: Option<Instant>,
     /// How often to take it (see [`crate::budget::news_interval`]).
     news_interval: Duration,
+    /// The run and its status as the last pass drew them (see [`Self::show`]).
+    drawn: (u64, Status),
     #[cfg(not(target_arch = "wasm32"))]
     native: NativeDialogs,
 }
@@ -290,6 +292,7 @@ impl ViewerApp {
             next_frame: None,
             last_news: None,
             news_interval: news_interval(start.software_renderer),
+            drawn: (0, Status::Idle),
             #[cfg(not(target_arch = "wasm32"))]
             native: NativeDialogs::default(),
         };
@@ -561,6 +564,14 @@ impl ViewerApp {
         egui::CentralPanel::no_frame().show(ui, |ui| self.view(ui));
         #[cfg(not(target_arch = "wasm32"))]
         self.native_dialogs(ui.ctx());
+        // A run that starts or ends changes the panels, and egui draws a widget new to it in
+        // a default style and asks for two more frames to draw it right. Laying the panels out
+        // again in the same frame instead (a discarded pass) costs no drawing, which a software
+        // renderer does on the cores the run needs.
+        if self.drawn.0 != self.run_id || self.drawn.1 != self.status {
+            self.drawn = (self.run_id, self.status.clone());
+            ui.ctx().request_discard("a run started or ended");
+        }
     }
 
     /// Loads the files that arrived: picked in the browser's dialog, or dropped on the window.
@@ -750,6 +761,29 @@ mod tests {
                 "the next look waits out the interval: {next:?} after {waited:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_run_that_starts_or_ends_is_laid_out_again_within_its_frame() {
+        let mut app = ViewerApp::new(StartOptions::default());
+        let ctx = egui::Context::default();
+        let passes = |app: &mut ViewerApp| {
+            ctx.run_ui(egui::RawInput::default(), |ui| app.show(ui))
+                .platform_output
+                .num_completed_passes
+        };
+        // egui lays some widgets out twice on the first frames.
+        for _ in 0..3 {
+            passes(&mut app);
+        }
+        assert_eq!(passes(&mut app), 1);
+        app.run();
+        assert_eq!(app.status, Status::Running);
+        assert_eq!(passes(&mut app), 2, "the run's start");
+        assert_eq!(passes(&mut app), 1);
+        app.cancel();
+        assert_eq!(passes(&mut app), 2, "the run's end");
+        assert_eq!(passes(&mut app), 1);
     }
 
     #[test]
