@@ -9,7 +9,9 @@
 // compiled the module by then), CLICK=S (load the page without autorun, wait S seconds once its
 // Run button is drawn, as a user would, then click Run and time that run). Each run prints
 // its core time (the figure the medians take) and when the page showed its result: that many
-// seconds after the click, or after the navigation for a first run with autorun.
+// seconds after the click, or after the navigation for a first run with autorun. VIEW=WxH
+// sets the page's size in CSS pixels (default 1280x800): on a software renderer a frame's
+// cost grows with its pixels, so a small page shows what the drawing costs the run.
 import { createServer } from 'node:http';
 import { mkdtempSync, readFileSync, readdirSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -22,6 +24,10 @@ const dist = process.env.BVSEG_DIST || join(here, '..', 'dist');
 const rounds = Number(process.argv[2] || 3);
 const mesh = process.argv[3] || 'spot';
 const pages = process.env.PAGES ? process.env.PAGES.split(',') : ['isolated', 'plain'];
+const view = (process.env.VIEW || '1280x800').split('x').map(Number);
+if (view.length !== 2 || !view.every((n) => Number.isInteger(n) && n > 0)) {
+  throw new Error(`VIEW=${process.env.VIEW}: give the page's size as WIDTHxHEIGHT, e.g. 640x400`);
+}
 
 /** CPU time (clock ticks) of each thread of the browser's processes, by `pid/tid`. */
 function browserThreads() {
@@ -76,7 +82,7 @@ const profile = mkdtempSync(join(tmpdir(), 'bvseg-bench-'));
 const context = await chromium.launchPersistentContext(profile, {
   executablePath: process.env.BVSEG_CHROMIUM || '/usr/bin/chromium',
   headless: true,
-  viewport: { width: 1280, height: 800 },
+  viewport: { width: view[0], height: view[1] },
   deviceScaleFactor: 1,
   args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking',
     '--disable-component-update', '--disable-sync', '--no-first-run', '--enable-unsafe-swiftshader',
