@@ -49,10 +49,12 @@ done
 # about 13 % smaller (threaded: 5.99 MB -> 5.22 MB) at the same speed, but for the plain
 # page's first run, about 4 % slower (docs/viewer.md, "Size and speed"). The workspace's
 # native builds and tests keep the profile's faster links.
+web_profile=(CARGO_PROFILE_RELEASE_DEBUG=0 CARGO_PROFILE_RELEASE_LTO=fat
+    CARGO_PROFILE_RELEASE_CODEGEN_UNITS=1)
 # WebAssembly SIMD (every current browser: Chrome 91, Firefox 89, Safari 16.4): the core runs
 # about 9 % faster with it (BENCHMARKS.md), with the same results (lane-wise IEEE arithmetic;
 # the browser test compares the page's JSON with the CLI's byte for byte).
-CARGO_PROFILE_RELEASE_DEBUG=0 CARGO_PROFILE_RELEASE_LTO=fat CARGO_PROFILE_RELEASE_CODEGEN_UNITS=1 \
+env "${web_profile[@]}" \
     CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="-C target-feature=+simd128" \
     cargo build --release --target wasm32-unknown-unknown -p bvseg-viewer --lib "${size_config[@]}"
 wasm="target/wasm32-unknown-unknown/release/bvseg_viewer.wasm"
@@ -74,8 +76,7 @@ if [ "$threads" != 0 ]; then
     if command -v rustup >/dev/null 2>&1 &&
         rustup component add rust-src --toolchain "$nightly" &&
         rustup target add wasm32-unknown-unknown --toolchain "$nightly" &&
-        CARGO_PROFILE_RELEASE_DEBUG=0 CARGO_PROFILE_RELEASE_LTO=fat \
-            CARGO_PROFILE_RELEASE_CODEGEN_UNITS=1 \
+        env "${web_profile[@]}" \
             CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="$threads_flags" \
             cargo "+$nightly" build --release --target wasm32-unknown-unknown -p bvseg-viewer \
             --lib --features threads -Z build-std=panic_abort,std --target-dir target/wasm-threads \
