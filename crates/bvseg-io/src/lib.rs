@@ -21,6 +21,7 @@ mod skeleton_file;
 mod stl;
 mod summary;
 mod volumes_read;
+mod xml;
 
 use std::path::Path;
 

@@ -10,6 +10,7 @@ use bvseg_core::{BoundingVolume, Segmentation, Shape, ShapeView, Skeleton};
 use glam::DAffine3;
 
 use super::proxy::{part_color, volume_rotation};
+use crate::xml::escape;
 
 /// The segmentation as an MJCF document; `model` names the model and its body. When the
 /// parts are bound to the bones of a skeleton ([`Segmentation::skeleton`]), a ragdoll instead:
@@ -105,26 +106,6 @@ pub fn to_mjcf(seg: &Segmentation, model: &str) -> String {
     }
     s.push_str("    </body>\n  </worldbody>\n</mujoco>\n");
     s
-}
-
-/// Escapes text for an XML attribute.
-fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c if c.is_control() => out.push('_'),
-            c => out.push(c),
-        }
-    }
-    if out.is_empty() {
-        out.push_str("bvseg");
-    }
-    out
 }
 
 /// One volume as an MJCF `<geom>` line (no indentation, no newline) named `name`; a hull

@@ -8,11 +8,12 @@ use bvseg_core::{BoundingVolume, Shape};
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::{
-    escape, numbers, read_text, resolve_mesh, vec3, Joint, Link, LinkResults, MeshRef, MeshSource,
-    Robot, RobotFormat,
+    numbers, read_text, resolve_mesh, vec3, Joint, Link, LinkResults, MeshRef, MeshSource, Robot,
+    RobotFormat,
 };
 use crate::export::mjcf::{geom_element, hull_asset};
 use crate::export::part_color;
+use crate::xml::escape;
 use crate::IoError;
 
 /// The text with every `<include file=...>` replaced by the children of the included file's

@@ -7,9 +7,10 @@ use bvseg_core::{BoundingVolume, Segmentation, Shape};
 use glam::{DAffine3, DMat3, DVec3};
 
 use super::{
-    escape, matrix_rpy, proper_axes, resolve_mesh, rpy_quat, vec3, Joint, Link, LinkResults,
-    MeshRef, MeshSource, Robot, RobotFormat,
+    matrix_rpy, proper_axes, resolve_mesh, rpy_quat, vec3, Joint, Link, LinkResults, MeshRef,
+    MeshSource, Robot, RobotFormat,
 };
+use crate::xml::escape;
 use crate::IoError;
 
 pub(crate) fn parse(

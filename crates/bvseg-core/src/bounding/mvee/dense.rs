@@ -4,24 +4,20 @@
 
 use crate::math;
 
-/// Solves `A x = b` for a symmetric positive definite `A` given by its lower triangle
-/// (overwritten by its Cholesky factor).
-pub(super) fn cholesky_solve<const K: usize>(
-    a: &mut [[f64; K]; K],
-    b: &[f64; K],
-) -> Option<[f64; K]> {
-    let k = K;
-    for j in 0..k {
+/// Overwrites the lower triangle of a symmetric `a` with its Cholesky factor; `false` (and
+/// `a` partly overwritten) unless `a` is positive definite.
+fn cholesky<const K: usize>(a: &mut [[f64; K]; K]) -> bool {
+    for j in 0..K {
         let mut d = a[j][j];
         for p in 0..j {
             d -= a[j][p] * a[j][p];
         }
         if d.is_nan() || d <= 0.0 {
-            return None;
+            return false;
         }
         let d = d.sqrt();
         a[j][j] = d;
-        for i in j + 1..k {
+        for i in j + 1..K {
             let mut v = a[i][j];
             for p in 0..j {
                 v -= a[i][p] * a[j][p];
@@ -29,15 +25,27 @@ pub(super) fn cholesky_solve<const K: usize>(
             a[i][j] = v / d;
         }
     }
+    true
+}
+
+/// Solves `A x = b` for a symmetric positive definite `A` given by its lower triangle
+/// (overwritten by its Cholesky factor).
+pub(super) fn cholesky_solve<const K: usize>(
+    a: &mut [[f64; K]; K],
+    b: &[f64; K],
+) -> Option<[f64; K]> {
+    if !cholesky(a) {
+        return None;
+    }
     let mut x = *b;
-    for i in 0..k {
+    for i in 0..K {
         for p in 0..i {
             x[i] -= a[i][p] * x[p];
         }
         x[i] /= a[i][i];
     }
-    for i in (0..k).rev() {
-        for p in i + 1..k {
+    for i in (0..K).rev() {
+        for p in i + 1..K {
             x[i] -= a[p][i] * x[p];
         }
         x[i] /= a[i][i];
@@ -47,24 +55,12 @@ pub(super) fn cholesky_solve<const K: usize>(
 
 /// `log det` of a symmetric matrix, `None` unless it is positive definite.
 pub(super) fn log_det<const N: usize>(mut a: [[f64; N]; N]) -> Option<f64> {
+    if !cholesky(&mut a) {
+        return None;
+    }
     let mut ld = 0.0;
-    for j in 0..N {
-        let mut d = a[j][j];
-        for p in 0..j {
-            d -= a[j][p] * a[j][p];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return None;
-        }
-        let d = d.sqrt();
-        ld += 2.0 * math::ln(d);
-        for i in j + 1..N {
-            let mut v = a[i][j];
-            for p in 0..j {
-                v -= a[i][p] * a[j][p];
-            }
-            a[i][j] = v / d;
-        }
+    for (j, row) in a.iter().enumerate() {
+        ld += 2.0 * math::ln(row[j]);
     }
     Some(ld)
 }
