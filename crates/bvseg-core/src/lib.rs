@@ -98,6 +98,7 @@ pub mod internals {
     pub use crate::fitting::{Fitter, MVEE_TOL};
     pub use crate::flooding::{is_connected, solid_components};
     pub use crate::initialization::cvt;
+    pub use crate::linalg::dense::{cholesky_solve, invert, log_det};
     pub use crate::linalg::sym_eigen;
     pub use crate::optimization::{lloyd, optimize, polish};
     pub use crate::partition::{Partition, Solid};

@@ -5,7 +5,7 @@
 
 use crate::math;
 
-use super::dense::{cholesky_solve, dot, invert, log_det, quad};
+use crate::linalg::dense::{cholesky_solve, dot, invert, log_det, quad};
 
 /// Primal log-barrier method for the lifted MVEE of `q`: minimise `-log det H` subject to
 /// `q_i^T H q_i <= 1`, over symmetric `H` (`N (N + 1) / 2` unknowns, so Newton steps are

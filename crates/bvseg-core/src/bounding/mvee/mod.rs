@@ -29,7 +29,6 @@
 #![allow(clippy::needless_range_loop)]
 
 mod barrier;
-mod dense;
 mod todd_yildirim;
 
 use crate::math;

@@ -6,7 +6,7 @@
 use crate::math;
 
 use super::barrier::barrier;
-use super::dense::{invert, quad};
+use crate::linalg::dense::{invert, quad};
 
 /// Todd–Yildirim: dual weights and the inverse of `M(u) = sum u_i q_i q_i^T` over an active
 /// set. The

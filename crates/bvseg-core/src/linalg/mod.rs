@@ -1,5 +1,14 @@
-//! Small dense 3x3 helpers that glam does not provide: symmetric eigen-decomposition and
-//! packed symmetric matrices.
+//! The core's own linear algebra, in one place: what glam does not provide. Here the 3x3
+//! symmetric eigen-decomposition (principal frames of parts, boxes, capsules and cylinders);
+//! in [`dense`], the small fixed-size systems of the ellipsoid fit (Cholesky solves, log
+//! determinants, inverses).
+//!
+//! Hand-written rather than nalgebra's fixed-size types, because a criterion run found these
+//! faster on the sizes the core uses (`cargo bench --bench linalg`; BENCHMARKS.md has no row
+//! for it, docs/development.md has the figures), and because every step here is an IEEE
+//! operation or [`crate::math`]'s, so the bits are the same natively and in WebAssembly.
+pub mod dense;
+
 use glam::{DMat3, DVec3};
 
 /// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations.

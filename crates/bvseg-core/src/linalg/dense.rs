@@ -1,4 +1,5 @@
-//! The small dense algebra of the ellipsoid fit: fixed-size arrays (N <= 4, K <= 10).
+//! The small dense algebra of the ellipsoid fit ([`crate::bounding::mvee`]): fixed-size
+//! arrays, N <= 4 for the lifted points and K <= 10 for the barrier's Newton systems.
 // Small dense matrix code (N <= 4, K <= 10) reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
@@ -30,7 +31,7 @@ fn cholesky<const K: usize>(a: &mut [[f64; K]; K]) -> bool {
 
 /// Solves `A x = b` for a symmetric positive definite `A` given by its lower triangle
 /// (overwritten by its Cholesky factor).
-pub(super) fn cholesky_solve<const K: usize>(
+pub fn cholesky_solve<const K: usize>(
     a: &mut [[f64; K]; K],
     b: &[f64; K],
 ) -> Option<[f64; K]> {
@@ -54,7 +55,7 @@ pub(super) fn cholesky_solve<const K: usize>(
 }
 
 /// `log det` of a symmetric matrix, `None` unless it is positive definite.
-pub(super) fn log_det<const N: usize>(mut a: [[f64; N]; N]) -> Option<f64> {
+pub fn log_det<const N: usize>(mut a: [[f64; N]; N]) -> Option<f64> {
     if !cholesky(&mut a) {
         return None;
     }
@@ -65,7 +66,7 @@ pub(super) fn log_det<const N: usize>(mut a: [[f64; N]; N]) -> Option<f64> {
     Some(ld)
 }
 
-pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     // Four independent accumulators, so that the sum vectorises into packed operations.
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
@@ -86,7 +87,7 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// `x^T A x`.
 #[inline]
-pub(super) fn quad<const N: usize>(a: &[[f64; N]; N], x: &[f64; N]) -> f64 {
+pub fn quad<const N: usize>(a: &[[f64; N]; N], x: &[f64; N]) -> f64 {
     let mut s = 0.0;
     for r in 0..N {
         let mut t = 0.0;
@@ -99,7 +100,7 @@ pub(super) fn quad<const N: usize>(a: &[[f64; N]; N], x: &[f64; N]) -> f64 {
 }
 
 /// Inverse by Gauss–Jordan elimination with partial pivoting; `None` if (nearly) singular.
-pub(super) fn invert<const N: usize>(mut m: [[f64; N]; N]) -> Option<[[f64; N]; N]> {
+pub fn invert<const N: usize>(mut m: [[f64; N]; N]) -> Option<[[f64; N]; N]> {
     let mut inv = [[0.0; N]; N];
     for (i, row) in inv.iter_mut().enumerate() {
         row[i] = 1.0;
