@@ -103,7 +103,9 @@ fn bench(c: &mut Criterion) {
         bch.iter(|| {
             for (a, b) in m10.iter().zip(&rhs) {
                 let m = na(black_box(a));
-                let x = m.cholesky().map(|ch| ch.solve(&SVector::from(*black_box(b))));
+                let x = m
+                    .cholesky()
+                    .map(|ch| ch.solve(&SVector::from(*black_box(b))));
                 black_box(x);
             }
         });

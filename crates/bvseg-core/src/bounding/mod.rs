@@ -145,5 +145,5 @@ mod tests {
         }
     }
 
-    const GOLDEN: u64 = 0xf0a3_9b7b_3ac2_fe12;
+    const GOLDEN: u64 = 0x97fd_8dc0_f8f7_5912;
 }

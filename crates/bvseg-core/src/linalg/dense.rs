@@ -31,10 +31,7 @@ fn cholesky<const K: usize>(a: &mut [[f64; K]; K]) -> bool {
 
 /// Solves `A x = b` for a symmetric positive definite `A` given by its lower triangle
 /// (overwritten by its Cholesky factor).
-pub fn cholesky_solve<const K: usize>(
-    a: &mut [[f64; K]; K],
-    b: &[f64; K],
-) -> Option<[f64; K]> {
+pub fn cholesky_solve<const K: usize>(a: &mut [[f64; K]; K], b: &[f64; K]) -> Option<[f64; K]> {
     if !cholesky(a) {
         return None;
     }
@@ -100,6 +97,8 @@ pub fn quad<const N: usize>(a: &[[f64; N]; N], x: &[f64; N]) -> f64 {
 }
 
 /// Inverse by Gauss–Jordan elimination with partial pivoting; `None` if (nearly) singular.
+/// Not nalgebra's 4x4 inverse, though faster: that one fails only at a zero determinant,
+/// and the ellipsoid fit relies on `None` for a nearly singular moment matrix to fall back.
 pub fn invert<const N: usize>(mut m: [[f64; N]; N]) -> Option<[[f64; N]; N]> {
     let mut inv = [[0.0; N]; N];
     for (i, row) in inv.iter_mut().enumerate() {
