@@ -63,6 +63,7 @@ pub fn log_det<const N: usize>(mut a: [[f64; N]; N]) -> Option<f64> {
     Some(ld)
 }
 
+/// The dot product of `a` and `b` (over the shorter's length).
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     // Four independent accumulators, so that the sum vectorises into packed operations.
     let n = a.len().min(b.len());
