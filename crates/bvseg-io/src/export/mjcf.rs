@@ -24,7 +24,7 @@ pub fn to_mjcf(seg: &Segmentation, model: &str) -> String {
     {
         return ragdoll(seg, sk, model);
     }
-    let model = escape(model);
+    let model = name(model);
     let mut s = String::new();
     let _ = writeln!(s, "<mujoco model=\"{model}\">");
     let _ = writeln!(
@@ -108,6 +108,17 @@ pub fn to_mjcf(seg: &Segmentation, model: &str) -> String {
     s
 }
 
+/// `s` escaped for an attribute, `bvseg` when empty: the export's names come from file
+/// names and a skeleton's joints, which may have none.
+fn name(s: &str) -> String {
+    let out = escape(s);
+    if out.is_empty() {
+        "bvseg".to_owned()
+    } else {
+        out
+    }
+}
+
 /// One volume as an MJCF `<geom>` line (no indentation, no newline) named `name`; a hull
 /// refers to the mesh asset `mesh`, which [`hull_asset`] writes. For writers that place
 /// volumes in bodies of their own (the robot writer).
@@ -170,11 +181,11 @@ fn ragdoll(seg: &Segmentation, sk: &Skeleton, model: &str) -> String {
         .iter()
         .enumerate()
         .map(|(i, j)| {
-            let name = escape(&j.name);
-            if seen.insert(name.clone()) {
-                name
+            let n = name(&j.name);
+            if seen.insert(n.clone()) {
+                n
             } else {
-                format!("{name}_{i}")
+                format!("{n}_{i}")
             }
         })
         .collect();
@@ -220,7 +231,7 @@ fn ragdoll(seg: &Segmentation, sk: &Skeleton, model: &str) -> String {
         }
     }
     let mut s = String::new();
-    let _ = writeln!(s, "<mujoco model=\"{}\">", escape(model));
+    let _ = writeln!(s, "<mujoco model=\"{}\">", name(model));
     let _ = writeln!(
         s,
         "  <!-- {}: {} {} volumes on {} bones, TOV {} MOV {} -->",
@@ -321,4 +332,16 @@ fn post_order(roots: &[usize], children: &[Vec<usize>]) -> Vec<usize> {
     }
     pre.reverse();
     pre
+}
+
+#[cfg(test)]
+mod tests {
+    use super::name;
+
+    #[test]
+    fn names_are_escaped_and_never_empty() {
+        assert_eq!(name(""), "bvseg");
+        assert_eq!(name("a\"b"), "a&quot;b");
+        assert_eq!(name("hip"), "hip");
+    }
 }
