@@ -16,9 +16,10 @@
 #![allow(clippy::needless_range_loop)]
 
 use bvseg::internals::{cholesky_solve, invert, log_det, sym_eigen, Rng};
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::measurement::WallTime;
+use criterion::{black_box, criterion_group, criterion_main, BenchmarkGroup, Criterion};
 use glam::{DMat3, DVec3};
-use nalgebra::{Matrix3, Matrix4, SMatrix, SVector};
+use nalgebra::{Matrix3, SMatrix, SVector};
 
 const COUNT: usize = 256;
 
@@ -112,6 +113,17 @@ fn na<const N: usize>(a: &[[f64; N]; N]) -> SMatrix<f64, N, N> {
     SMatrix::from_fn(|i, j| a[i][j])
 }
 
+/// Times `f` on each of `inputs` in turn, as one iteration.
+fn each<T, R>(g: &mut BenchmarkGroup<'_, WallTime>, name: &str, inputs: &[T], f: impl Fn(&T) -> R) {
+    g.bench_function(name, |bch| {
+        bch.iter(|| {
+            for x in inputs {
+                black_box(f(black_box(x)));
+            }
+        });
+    });
+}
+
 fn bench(c: &mut Criterion) {
     let mut rng = Rng::new(7);
     let m3 = spd::<3>(&mut rng, COUNT);
@@ -145,82 +157,32 @@ fn bench(c: &mut Criterion) {
         }
     }
 
+    let sys: Vec<([[f64; 10]; 10], [f64; 10])> = m10.iter().copied().zip(rhs).collect();
     let mut g = c.benchmark_group("linalg");
-    g.bench_function("sym_eigen_3x3/bvseg", |bch| {
-        bch.iter(|| {
-            for a in &m3 {
-                black_box(sym_eigen(DMat3::from_cols_array_2d(black_box(a))));
-            }
-        });
+    each(&mut g, "sym_eigen_3x3/bvseg", &m3, |a| {
+        sym_eigen(DMat3::from_cols_array_2d(a))
     });
-    g.bench_function("sym_eigen_3x3/jacobi", |bch| {
-        bch.iter(|| {
-            for a in &m3 {
-                black_box(jacobi_eigen(DMat3::from_cols_array_2d(black_box(a))));
-            }
-        });
+    each(&mut g, "sym_eigen_3x3/jacobi", &m3, |a| {
+        jacobi_eigen(DMat3::from_cols_array_2d(a))
     });
-    g.bench_function("sym_eigen_3x3/nalgebra", |bch| {
-        bch.iter(|| {
-            for a in &m3 {
-                let m: Matrix3<f64> = na(black_box(a));
-                black_box(m.symmetric_eigen());
-            }
-        });
+    each(&mut g, "sym_eigen_3x3/nalgebra", &m3, |a| {
+        na(a).symmetric_eigen()
     });
-    g.bench_function("cholesky_solve_10x10/bvseg", |bch| {
-        bch.iter(|| {
-            for (a, b) in m10.iter().zip(&rhs) {
-                let mut a = *black_box(a);
-                black_box(cholesky_solve(&mut a, black_box(b)));
-            }
-        });
+    each(&mut g, "cholesky_solve_10x10/bvseg", &sys, |(a, b)| {
+        cholesky_solve(&mut a.clone(), b)
     });
-    g.bench_function("cholesky_solve_10x10/nalgebra", |bch| {
-        bch.iter(|| {
-            for (a, b) in m10.iter().zip(&rhs) {
-                let m = na(black_box(a));
-                let x = m
-                    .cholesky()
-                    .map(|ch| ch.solve(&SVector::from(*black_box(b))));
-                black_box(x);
-            }
-        });
+    each(&mut g, "cholesky_solve_10x10/nalgebra", &sys, |(a, b)| {
+        na(a).cholesky().map(|ch| ch.solve(&SVector::from(*b)))
     });
-    g.bench_function("log_det_4x4/bvseg", |bch| {
-        bch.iter(|| {
-            for a in &m4 {
-                black_box(log_det(*black_box(a)));
-            }
-        });
+    each(&mut g, "log_det_4x4/bvseg", &m4, |a| log_det(*a));
+    each(&mut g, "log_det_4x4/nalgebra", &m4, |a| {
+        na(a).cholesky().map(|ch| {
+            let l = ch.l_dirty();
+            (0..4).map(|i| 2.0 * l[(i, i)].ln()).sum::<f64>()
+        })
     });
-    g.bench_function("log_det_4x4/nalgebra", |bch| {
-        bch.iter(|| {
-            for a in &m4 {
-                let m: Matrix4<f64> = na(black_box(a));
-                let ld = m.cholesky().map(|ch| {
-                    let l = ch.l_dirty();
-                    (0..4).map(|i| 2.0 * l[(i, i)].ln()).sum::<f64>()
-                });
-                black_box(ld);
-            }
-        });
-    });
-    g.bench_function("invert_4x4/bvseg", |bch| {
-        bch.iter(|| {
-            for a in &m4 {
-                black_box(invert(*black_box(a)));
-            }
-        });
-    });
-    g.bench_function("invert_4x4/nalgebra", |bch| {
-        bch.iter(|| {
-            for a in &m4 {
-                let m: Matrix4<f64> = na(black_box(a));
-                black_box(m.try_inverse());
-            }
-        });
-    });
+    each(&mut g, "invert_4x4/bvseg", &m4, |a| invert(*a));
+    each(&mut g, "invert_4x4/nalgebra", &m4, |a| na(a).try_inverse());
     g.finish();
 }
 
