@@ -15,8 +15,8 @@ class ExportError(Exception):
 def write_obj(obj, depsgraph, path, matrix=None):
     """Writes the evaluated (modifiers applied) mesh of `obj` as triangles to `path`, its
     vertices mapped by `matrix` (4x4, None: the object's own local coordinates). Returns the
-    largest absolute coordinate written. Coordinates are printed with 17 significant digits,
-    so bvseg reads exactly the single-precision values Blender holds."""
+    vertices written (n x 3, float64). Coordinates are printed with 17 significant digits, so
+    bvseg reads exactly the values written."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
@@ -40,14 +40,15 @@ def write_obj(obj, depsgraph, path, matrix=None):
         f.write(f"# {n} vertices, {t} triangles of Blender object {obj.name!r}\n")
         f.write("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in co.tolist()))
         f.write("".join(f"f {a} {b} {c}\n" for a, b, c in (tris.reshape(t, 3) + 1).tolist()))
-    return float(np.abs(co).max())
+    return co
 
 
 def write_skinned_glb(armature, meshes, path):
     """Exports `armature` and its skinned `meshes` (at rest, with their modifiers but the
     armature's, and the armature's actions) to a GLB in Blender's own axes (Z up), so the
-    file's model space is Blender's world space. Returns the largest absolute vertex
-    coordinate at rest (world space) and the glTF node names by index."""
+    file's model space is Blender's world space. Returns the meshes' vertices placed by their
+    objects (n x 3, world space at rest when the meshes hang under the armature unposed) and
+    the glTF node names by index."""
     view_layer = bpy.context.view_layer
     selected = [o for o in view_layer.objects if o.select_get()]
     active = view_layer.objects.active
@@ -86,15 +87,13 @@ def write_skinned_glb(armature, meshes, path):
     if "FINISHED" not in result:
         raise ExportError(f"{armature.name}: glTF export failed")
     nodes = glb_node_names(path)
-    largest = 0.0
+    placed = [np.zeros((0, 3))]
     for m in meshes:
         co = np.empty(len(m.data.vertices) * 3, dtype=np.float32)
         m.data.vertices.foreach_get("co", co)
-        co = co.reshape(-1, 3).astype(np.float64)
         w = np.array(m.matrix_world, dtype=np.float64)
-        if len(co):
-            largest = max(largest, float(np.abs(co @ w[:3, :3].T + w[:3, 3]).max()))
-    return largest, nodes
+        placed.append(co.reshape(-1, 3).astype(np.float64) @ w[:3, :3].T + w[:3, 3])
+    return np.concatenate(placed), nodes
 
 
 def glb_node_names(path):

@@ -11,15 +11,28 @@ import os
 import tempfile
 
 import bpy
+import numpy as np
 from bpy.types import Operator
 from mathutils import Matrix
 
 from . import colliders, export, geometry, props, runner
 
 # Blender holds vertices and transforms in single precision: a coordinate rounds by up to 6e-8
-# of its size, and a collider's placement by as much again. Every collider grows by a
-# millionth of the largest coordinate, so that the enclosure survives both.
+# of its size, and each product of transforms that places a collider in the world by a few
+# times that, of the world coordinates. Every collider grows by a millionth of the largest
+# coordinate, in the fitting space and in the world, so that the enclosure survives both.
 F32_MARGIN = 1e-6
+
+
+def f32_margin(points, fit_to_world):
+    """The margin (fitting-space units) that holds the enclosure through single precision, for
+    `points` (n x 3, fitting space) placed in the world by `fit_to_world` (4x4)."""
+    m = np.array(fit_to_world, dtype=np.float64)
+    world = points @ m[:3, :3].T + m[:3, 3]
+    # A fitting-space length maps to at least the smallest singular value times it.
+    shrink = max(float(np.linalg.svd(m[:3, :3], compute_uv=False).min()), 1e-12)
+    largest = max(float(np.abs(points).max(initial=0.0)), float(np.abs(world).max(initial=0.0)) / shrink)
+    return F32_MARGIN * max(largest, 1e-30)
 
 
 def armature_of(obj):
@@ -55,20 +68,23 @@ class Job:
         if self.meshes is None:
             self.input = os.path.join(tmp, "input.obj")
             depsgraph = context.evaluated_depsgraph_get()
+            to_world = self.source.matrix_world.copy()
             if settings.space == "WORLD":
-                to_world = self.source.matrix_world.copy()
-                largest = export.write_obj(self.source, depsgraph, self.input, [list(r) for r in to_world])
-                self.placement = colliders.Placement(self.source, Matrix.Identity(4))
+                points = export.write_obj(self.source, depsgraph, self.input, [list(r) for r in to_world])
+                fit_to_world = Matrix.Identity(4)
+                self.placement = colliders.Placement(self.source, fit_to_world)
             else:
-                largest = export.write_obj(self.source, depsgraph, self.input)
+                points = export.write_obj(self.source, depsgraph, self.input)
+                fit_to_world = to_world
                 self.placement = colliders.Placement(self.source)
         else:
             self.input = os.path.join(tmp, "input.glb")
-            largest, nodes = export.write_skinned_glb(self.source, self.meshes, self.input)
+            points, nodes = export.write_skinned_glb(self.source, self.meshes, self.input)
             bones = {i: n for i, n in enumerate(nodes) if n is not None}
             bones.update({n: n for n in nodes if n is not None})
-            self.placement = colliders.Placement(self.source, Matrix.Identity(4), bones)
-        margin = settings.margin + F32_MARGIN * max(largest, 1e-30)
+            fit_to_world = Matrix.Identity(4)
+            self.placement = colliders.Placement(self.source, fit_to_world, bones)
+        margin = settings.margin + f32_margin(points, fit_to_world)
         self.args = runner.segment_args(settings, margin)
         self.run = runner.Run(exe, self.input, os.path.join(tmp, "volumes.json"), self.args)
 
