@@ -474,6 +474,103 @@ def test_errors(bpy, bvseg, tmp, prefs):
     check(run_op(bpy, target="physx", max_k=4) == {"FINISHED"}, "a good mesh beside a bad one failed")
 
 
+class Stub:
+    """Takes any layout call; records the operator buttons' properties."""
+
+    def __init__(self, log=None):
+        self.log = log if log is not None else []
+
+    def __getattr__(self, name):
+        def call(*args, **kw):
+            if name == "panel":
+                return Stub(self.log), Stub(self.log)
+            if name == "operator":
+                op = type("OpProps", (), {})()
+                self.log.append(op)
+                return op
+            return Stub(self.log)
+        return call
+
+    def __setattr__(self, name, value):
+        object.__setattr__(self, name, value)
+
+
+def test_panel(bpy, ui_module):
+    """The sidebar panel draws, and its button hands every setting to the operator."""
+    print("panel")
+    reset(bpy)
+    obj = import_obj(bpy, "spot.obj")
+    select(bpy, [obj])
+    layout = Stub()
+    panel = type("PanelSelf", (), {"layout": layout})()
+    bpy.context.scene.bvseg.naming = "GODOT"
+    ui_module.VIEW3D_PT_bvseg.draw(panel, bpy.context)
+    ops = [o for o in layout.log]
+    props = sys.modules[ADDON + ".props"].SETTINGS
+    check(len(ops) == 1 and all(hasattr(ops[0], p) for p in props), "the panel's button lacks settings")
+    check(ops and getattr(ops[0], "naming", None) == "GODOT", "the panel's button ignores the scene's naming")
+
+
+def test_modal(bpy, bvseg, tmp):
+    """The operator as the panel starts it (invoke, then modal on timer events): it ends with
+    the colliders, and Esc stops a run without changing the scene."""
+    import types
+    print("modal")
+    operator = sys.modules[ADDON + ".operator"]
+    cls = operator.BVSEG_OT_colliders
+    reset(bpy)
+    obj = import_obj(bpy, "bunny.obj")
+    select(bpy, [obj])
+
+    class Timer:
+        pass
+
+    status = []
+    wm = types.SimpleNamespace(
+        progress_begin=lambda a, b: None, progress_update=lambda v: None, progress_end=lambda: None,
+        event_timer_add=lambda step, window=None: Timer(), event_timer_remove=lambda t: None,
+        modal_handler_add=lambda op: None)
+    space = types.SimpleNamespace(status_text_set=lambda text: status.append(text))
+
+    class Context:
+        window_manager, workspace, window = wm, space, None
+
+        def __getattr__(self, name):
+            return getattr(bpy.context, name)
+
+    reports = []
+    settings = {name: getattr(bpy.context.scene.bvseg, name) for name in sys.modules[ADDON + ".props"].SETTINGS}
+    settings.update(target="physx", naming="PLAIN", max_k=12)
+    fake = type("ModalOp", (), {
+        "invoke": cls.invoke, "modal": cls.modal, "_status": cls._status, "_end": cls._end,
+        "report": lambda self, kind, text: reports.append((set(kind), text)), **settings})()
+    ctx = Context()
+    result = fake.invoke(ctx, None)
+    check(result == {"RUNNING_MODAL"}, f"invoke returned {result}")
+    started = time.time()
+    while result == {"RUNNING_MODAL"} and time.time() - started < 120:
+        time.sleep(0.05)
+        result = fake.modal(ctx, types.SimpleNamespace(type="TIMER", timer=fake._timer))
+    check(result == {"FINISHED"}, f"the modal run ended with {result}")
+    check(any("bvseg 1/1: bunny" in s for s in status if s), f"no progress in the status bar: {status[:3]}")
+    check(status and status[-1] is None, "the status bar text is not cleared")
+    check(len(colliders_of(obj)) > 0, "the modal run made no colliders")
+    print(f"  modal: {len(colliders_of(obj))} colliders; status bar said {status[-2]!r}")
+    # Esc while bvseg runs: the process is killed, the colliders stay as they were.
+    before = [c.name for c in colliders_of(obj)]
+    settings.update(max_k=96, samples=400000)
+    fake = type("ModalOp", (), {
+        "invoke": cls.invoke, "modal": cls.modal, "_status": cls._status, "_end": cls._end,
+        "report": lambda self, kind, text: reports.append((set(kind), text)), **settings})()
+    check(fake.invoke(ctx, None) == {"RUNNING_MODAL"}, "second invoke")
+    process = fake._session.job.run.process
+    result = fake.modal(ctx, types.SimpleNamespace(type="ESC", timer=None))
+    check(result == {"CANCELLED"}, f"Esc ended with {result}")
+    check(process.poll() is not None, "Esc left bvseg running")
+    check([c.name for c in colliders_of(obj)] == before, "Esc changed the colliders")
+    check(any("stopped" in text for _, text in reports), "Esc was not reported")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--bvseg", required=True)
@@ -481,6 +578,8 @@ def main():
     ap.add_argument("--zip", help="the extension zip (--mode extension)")
     ap.add_argument("--character", action="append",
                     help="skinned glTF of assets/characters to test (default RiggedSimple.glb, CesiumMan.glb)")
+    ap.add_argument("--only", help="comma list of the legacy mode's tests to run: presets, multi, armature, "
+                    "errors, panel, modal (default all)")
     args = ap.parse_args()
     bvseg = os.path.abspath(args.bvseg)
     if not os.access(bvseg, os.X_OK):
@@ -518,11 +617,17 @@ def main():
     try:
         test_geometry(sys.modules[ADDON + ".geometry"])
         if args.mode == "legacy":
-            test_presets(bpy, bvseg, tmp)
-            test_multi(bpy, bvseg, tmp)
-            for character in args.character or ["RiggedSimple.glb", "CesiumMan.glb"]:
-                test_armature(bpy, bvseg, tmp, character)
-            test_errors(bpy, bvseg, tmp, prefs)
+            tests = {
+                "presets": lambda: test_presets(bpy, bvseg, tmp),
+                "multi": lambda: test_multi(bpy, bvseg, tmp),
+                "armature": lambda: [test_armature(bpy, bvseg, tmp, c)
+                                     for c in args.character or ["RiggedSimple.glb", "CesiumMan.glb"]],
+                "errors": lambda: test_errors(bpy, bvseg, tmp, prefs),
+                "panel": lambda: test_panel(bpy, sys.modules[ADDON + ".ui"]),
+                "modal": lambda: test_modal(bpy, bvseg, tmp),
+            }
+            for name in (args.only.split(",") if args.only else tests):
+                tests[name]()
         else:
             reset(bpy)
             obj = import_obj(bpy, "fourleg_2.obj")
