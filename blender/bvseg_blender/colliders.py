@@ -122,7 +122,7 @@ def build(context, name, placement, volumes, settings):
         wanted = naming.collider_name(settings.naming, name, c.shape, i)
         obj = bpy.data.objects.new(wanted, _mesh(wanted, c))
         if obj.name != wanted:
-            warnings.append(f"{wanted} is taken: the collider is called {obj.name}")
+            warnings.append(f"Blender named collider {wanted} {obj.name} (the name is taken or too long)")
         coll.objects.link(obj)
         bone = v.get("bone")
         bone_name = placement.bones.get(bone) if bone is not None else None
