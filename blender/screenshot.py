@@ -1,7 +1,8 @@
 """Renders the add-on's screenshot headless (Workbench): spot with Unreal-named engine
 primitives and CesiumMan with per-bone colliders, in their object colours.
 
-    target/blender-venv/bin/python blender/screenshot.py target/release/bvseg docs/images/blender_colliders.png
+    target/blender-venv/bin/python blender/screenshot.py \
+        target/release/bvseg docs/images/blender-colliders.png
 
 (target/blender-venv: made by blender/ci.sh.) The colliders are drawn as thin wire tubes (a
 Wireframe modifier), since a render does not draw Blender's wire display.
@@ -14,10 +15,9 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "blender"))
 
-import bpy  # noqa: E402
-from mathutils import Vector  # noqa: E402
-
+import bpy  # noqa: E402  isort: skip (first: it puts mathutils on the path)
 import bvseg_blender  # noqa: E402
+from mathutils import Vector  # noqa: E402
 
 
 def main(bvseg, out):

@@ -20,7 +20,7 @@ bl_info = {
     "category": "Physics",
 }
 
-import bpy  # noqa: E402
+import bpy  # noqa: E402 (after bl_info, which Blender reads first)
 
 from . import operator, ui  # noqa: E402
 

@@ -94,9 +94,10 @@ class Placement:
         elif bone is not None:
             obj.parent_type = "BONE"
             obj.parent_bone = bone.name
-            # Blender puts a bone's child at the bone's tail in the pose (pose matrix, then
-            # bone length along Y). Undo that and the rest pose, so that the collider is where
-            # its volume is at rest and moves with the bone: world = A P (Y l) inv(Y l) inv(B) inv(A) F.
+            # Blender places a bone's child from the bone's tail in the pose: A P T, with A the
+            # armature's world matrix, P the pose matrix and T the bone's length along its Y.
+            # With the inverse of its rest value A B T (B the rest matrix) as parent inverse,
+            # world = A P T (A B T)^-1 F: the volume's frame F at rest, moved with the bone.
             rest = parent.matrix_world @ bone.matrix_local @ Matrix.Translation((0.0, bone.length, 0.0))
             obj.matrix_parent_inverse = rest.inverted() @ self.fit_to_world
         else:
@@ -118,7 +119,7 @@ def build(context, name, placement, volumes, settings):
     coll = _collection(context.scene)
     warnings = []
     objects = []
-    for i, (v, c) in enumerate(zip(volumes, shapes)):
+    for i, (v, c) in enumerate(zip(volumes, shapes, strict=True)):
         wanted = naming.collider_name(settings.naming, name, c.shape, i)
         obj = bpy.data.objects.new(wanted, _mesh(wanted, c))
         if obj.name != wanted:
@@ -151,8 +152,13 @@ def _rigid_bodies(context, objects):
     scene = context.scene
     objs = [o for o, _ in objects]
     try:
-        with context.temp_override(scene=scene, object=objs[0], active_object=objs[0],
-                                   selected_objects=objs, selected_editable_objects=objs):
+        with context.temp_override(
+            scene=scene,
+            object=objs[0],
+            active_object=objs[0],
+            selected_objects=objs,
+            selected_editable_objects=objs,
+        ):
             if scene.rigidbody_world is None:
                 bpy.ops.rigidbody.world_add()
             bpy.ops.rigidbody.objects_add(type="PASSIVE")

@@ -9,13 +9,13 @@ says how far each has got, Esc stops them.
 import json
 import os
 import tempfile
+import traceback
 
-import bpy
 import numpy as np
 from bpy.types import Operator
 from mathutils import Matrix
 
-from . import colliders, export, geometry, props, runner
+from . import colliders, export, geometry, naming, props, runner
 
 # Blender holds vertices and transforms in single precision: a coordinate rounds by up to 6e-8
 # of its size, and each product of transforms that places a collider in the world by a few
@@ -33,6 +33,13 @@ def f32_margin(points, fit_to_world):
     shrink = max(float(np.linalg.svd(m[:3, :3], compute_uv=False).min()), 1e-12)
     largest = max(float(np.abs(points).max(initial=0.0)), float(np.abs(world).max(initial=0.0)) / shrink)
     return F32_MARGIN * max(largest, 1e-30)
+
+
+def unexpected(error):
+    """The report line of an exception the add-on did not expect; the traceback goes to the
+    system console for a bug report."""
+    traceback.print_exc()
+    return f"unexpected {type(error).__name__} in the bvseg add-on: {error} (traceback on the console)"
 
 
 def armature_of(obj):
@@ -97,7 +104,7 @@ class Job:
 
     def finish(self, context, settings):
         """Reads the volumes and builds the colliders; returns (report line, warnings)."""
-        doc, summary = self.run.result()
+        doc = self.run.result()
         try:
             objects, warnings = colliders.build(context, self.name, self.placement, doc["volumes"], settings)
         except geometry.VolumeError as e:
@@ -105,11 +112,16 @@ class Job:
         # How these colliders were made, to run it again: `bvseg segment INPUT ARGS`, INPUT the
         # evaluated mesh in the fitting space (OBJ) or the armature with its meshes (GLB).
         self.source["bvseg_run"] = json.dumps(
-            {"input": os.path.basename(self.input), "space": "WORLD" if self.meshes else settings.space,
-             "args": self.args})
+            {
+                "input": os.path.basename(self.input),
+                "space": "WORLD" if self.meshes else settings.space,
+                "args": self.args,
+            }
+        )
         kinds = {}
         for o in objects:
-            kinds[o["bvseg_shape"]] = kinds.get(o["bvseg_shape"], 0) + 1
+            word = naming.PLAIN_KIND.get(o["bvseg_shape"], o["bvseg_shape"])
+            kinds[word] = kinds.get(word, 0) + 1
         line = f"{self.name}: {len(objects)} colliders ({', '.join(f'{n} {k}' for k, n in kinds.items())})"
         metrics = doc.get("metrics", {}) if isinstance(doc.get("metrics"), dict) else {}
         if isinstance(metrics.get("tov"), (int, float)):
@@ -133,7 +145,9 @@ def plan(objects, per_bone, scene):
             if per_bone:
                 rigs.setdefault(o, [])
             else:
-                static += [m for m in scene.objects if m.type == "MESH" and armature_of(m) is o and m not in static]
+                static += [
+                    m for m in scene.objects if m.type == "MESH" and armature_of(m) is o and m not in static
+                ]
         else:
             skipped.append(f"{o.name}: not a mesh or an armature ({o.type.lower()})")
     jobs = [Job(o) for o in static]
@@ -179,6 +193,8 @@ class Session:
                 return True
             except (export.ExportError, runner.RunError) as e:
                 self.failed.append(job.named(str(e)))
+            except Exception as e:  # a bug: reported, with the traceback on the console
+                self.failed.append(job.named(unexpected(e)))
         return False
 
     def finish_job(self, context):
@@ -191,6 +207,8 @@ class Session:
             self.failed.append(job.named(str(e)))
         except ReferenceError:
             self.failed.append(f"{job.name}: the object was deleted during the run")
+        except Exception as e:  # a bug: reported, with the traceback on the console
+            self.failed.append(job.named(unexpected(e)))
 
     def status(self):
         job = self.job
@@ -304,11 +322,13 @@ class BVSEG_OT_colliders(Operator):
 
     def modal(self, context, event):
         session = self._session
-        if event.type == "ESC":
+        if event.type == "ESC" and event.value == "PRESS":
             session.cancel()
             self._end(context)
             done = len(session.done)
-            self.report({"WARNING"}, f"bvseg stopped; {done} object{'s' if done != 1 else ''} done before")
+            self.report(
+                {"WARNING"}, f"bvseg stopped by Esc; {done} object{'s' if done != 1 else ''} got colliders"
+            )
             for line in session.done:
                 self.report({"INFO"}, line)
             return {"FINISHED"} if done else {"CANCELLED"}

@@ -77,7 +77,10 @@ class VIEW3D_PT_bvseg(Panel):
             if rigged and s.per_bone:
                 layout.label(text="Armatures: one collider set per armature", icon="ARMATURE_DATA")
             if n:
-                layout.label(text=f"Replaces {n} collider{'s' if n != 1 else ''} of an earlier run", icon="FILE_REFRESH")
+                layout.label(
+                    text=f"Replaces {n} collider{'s' if n != 1 else ''} of an earlier run",
+                    icon="FILE_REFRESH",
+                )
 
 
 CLASSES = (BvsegSettings, BvsegPreferences, BVSEG_OT_colliders, VIEW3D_PT_bvseg)

@@ -22,7 +22,6 @@ import argparse
 import json
 import math
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -35,11 +34,23 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 MESHES = os.path.join(ROOT, "assets", "meshes")
 CHARACTERS = os.path.join(ROOT, "assets", "characters")
 
-KIND_WORD = {"obb": "box", "sphere": "sphere", "capsule": "capsule", "cylinder": "cylinder",
-             "ellipsoid": "ellipsoid", "hull": "hull"}
+KIND_WORD = {
+    "obb": "box",
+    "sphere": "sphere",
+    "capsule": "capsule",
+    "cylinder": "cylinder",
+    "ellipsoid": "ellipsoid",
+    "hull": "hull",
+}
 UNREAL = {"obb": "UBX", "sphere": "USP", "capsule": "UCP"}
-RIGID = {"obb": "BOX", "sphere": "SPHERE", "capsule": "CAPSULE", "cylinder": "CYLINDER",
-         "ellipsoid": "CONVEX_HULL", "hull": "CONVEX_HULL"}
+RIGID = {
+    "obb": "BOX",
+    "sphere": "SPHERE",
+    "capsule": "CAPSULE",
+    "cylinder": "CYLINDER",
+    "ellipsoid": "CONVEX_HULL",
+    "hull": "CONVEX_HULL",
+}
 
 FAILURES = []
 
@@ -61,6 +72,7 @@ def expected_name(preset, source, shape, i):
 
 # ---------------------------------------------------------------- geometry of the add-on alone
 
+
 def unit_fibonacci(n):
     golden = math.pi * (3.0 - math.sqrt(5.0))
     out = []
@@ -74,6 +86,7 @@ def unit_fibonacci(n):
 def planes_of(verts, faces):
     """(normal, offset) of every face, from its first three corners."""
     import numpy as np
+
     v = np.asarray(verts, dtype=np.float64)
     out = []
     for f in faces:
@@ -88,6 +101,7 @@ def test_geometry(geometry):
     """Every collider mesh encloses the exact surface of its volume, faces outward."""
     print("geometry: collider meshes enclose their exact volumes")
     import numpy as np
+
     rng = np.random.default_rng(7)
     surf = unit_fibonacci(2000)
     for _ in range(20):
@@ -97,22 +111,50 @@ def test_geometry(geometry):
         r, h = rng.uniform(0.05, 2.0), rng.uniform(0.0, 3.0)
         axis = axes[0]
         vols = {
-            "obb": ({"shape": "obb", "center": center.tolist(), "axes": axes.tolist(), "radii": radii.tolist()},
-                    [center + axes.T @ (radii * np.array(s)) for s in
-                     [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]]),
-            "ellipsoid": ({"shape": "ellipsoid", "center": center.tolist(), "axes": axes.tolist(),
-                           "radii": radii.tolist()},
-                          [center + axes.T @ (radii * np.array(p)) for p in surf]),
-            "sphere": ({"shape": "sphere", "center": center.tolist(), "radius": r},
-                       [center + r * np.array(p) for p in surf]),
-            "capsule": ({"shape": "capsule", "center": center.tolist(), "axis": axis.tolist(),
-                         "half_length": h, "radius": r},
-                        [center + r * np.array(p) + (h if np.dot(p, axis) >= 0 else -h) * axis
-                         for p in surf]),
-            "cylinder": ({"shape": "cylinder", "center": center.tolist(), "axis": axis.tolist(),
-                          "half_length": h + 0.01, "radius": r},
-                         [center + t * (h + 0.01) * axis + r * (math.cos(a) * axes[1] + math.sin(a) * axes[2])
-                          for t in (-1.0, -0.3, 0.5, 1.0) for a in np.linspace(0, 2 * math.pi, 500)]),
+            "obb": (
+                {"shape": "obb", "center": center.tolist(), "axes": axes.tolist(), "radii": radii.tolist()},
+                [
+                    center + axes.T @ (radii * np.array(s))
+                    for s in [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+                ],
+            ),
+            "ellipsoid": (
+                {
+                    "shape": "ellipsoid",
+                    "center": center.tolist(),
+                    "axes": axes.tolist(),
+                    "radii": radii.tolist(),
+                },
+                [center + axes.T @ (radii * np.array(p)) for p in surf],
+            ),
+            "sphere": (
+                {"shape": "sphere", "center": center.tolist(), "radius": r},
+                [center + r * np.array(p) for p in surf],
+            ),
+            "capsule": (
+                {
+                    "shape": "capsule",
+                    "center": center.tolist(),
+                    "axis": axis.tolist(),
+                    "half_length": h,
+                    "radius": r,
+                },
+                [center + r * np.array(p) + (h if np.dot(p, axis) >= 0 else -h) * axis for p in surf],
+            ),
+            "cylinder": (
+                {
+                    "shape": "cylinder",
+                    "center": center.tolist(),
+                    "axis": axis.tolist(),
+                    "half_length": h + 0.01,
+                    "radius": r,
+                },
+                [
+                    center + t * (h + 0.01) * axis + r * (math.cos(a) * axes[1] + math.sin(a) * axes[2])
+                    for t in (-1.0, -0.3, 0.5, 1.0)
+                    for a in np.linspace(0, 2 * math.pi, 500)
+                ],
+            ),
         }
         for shape, (vol, points) in vols.items():
             c = geometry.collider(vol)
@@ -136,11 +178,18 @@ def test_geometry(geometry):
 
 # ---------------------------------------------------------------- Blender scene helpers
 
+
 def reset(bpy):
     for o in list(bpy.data.objects):
         bpy.data.objects.remove(o, do_unlink=True)
-    for coll in (bpy.data.meshes, bpy.data.armatures, bpy.data.actions, bpy.data.collections,
-                 bpy.data.materials, bpy.data.images):
+    for coll in (
+        bpy.data.meshes,
+        bpy.data.armatures,
+        bpy.data.actions,
+        bpy.data.collections,
+        bpy.data.materials,
+        bpy.data.images,
+    ):
         for item in list(coll):
             coll.remove(item)
     scene = bpy.context.scene
@@ -168,6 +217,7 @@ def select(bpy, objects):
 def world_vertices(bpy, obj):
     """The evaluated mesh's vertices in world space (float64 from Blender's float32)."""
     import numpy as np
+
     depsgraph = bpy.context.evaluated_depsgraph_get()
     ev = obj.evaluated_get(depsgraph)
     me = ev.to_mesh()
@@ -183,6 +233,7 @@ def collider_halfspaces(bpy, obj, shrink=1.0):
     triangles from Blender's own convex hull, their planes from the float64 vertices."""
     import bmesh
     import numpy as np
+
     world = world_vertices(bpy, obj)
     if shrink != 1.0:
         centre = np.array(obj.matrix_world, dtype=np.float64)[:3, 3]
@@ -214,6 +265,7 @@ def collider_halfspaces(bpy, obj, shrink=1.0):
 def outside_count(bpy, points, colliders, shrink=1.0, slack=0.0):
     """How many points lie in no collider (plane offsets allowed `slack`)."""
     import numpy as np
+
     inside = np.zeros(len(points), dtype=bool)
     for c in colliders:
         n, d = collider_halfspaces(bpy, c, shrink)
@@ -234,6 +286,7 @@ def reference_volumes(bpy, bvseg, source, tmp):
     an export written here (OBJ: the evaluated mesh in the fitting space; armature: the
     add-on's GLB export, whose node names give the bones)."""
     import numpy as np
+
     run = json.loads(source["bvseg_run"])
     nodes = None
     if run["input"].endswith(".obj"):
@@ -260,8 +313,11 @@ def reference_volumes(bpy, bvseg, source, tmp):
         path = os.path.join(tmp, "ref.glb")
         _, nodes = export.write_skinned_glb(source, deformed_meshes(bpy, source), path)
     out = os.path.join(tmp, "ref.json")
-    subprocess.run([bvseg, "segment", path, *run["args"], "-o", out, "-q", "--no-hierarchy"], check=True,
-                   stdout=subprocess.DEVNULL)
+    subprocess.run(
+        [bvseg, "segment", path, *run["args"], "-o", out, "-q", "--no-hierarchy"],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
     with open(out) as f:
         return json.load(f)["volumes"], nodes
 
@@ -278,28 +334,37 @@ def check_run(bpy, bvseg, tmp, source, preset, meshes, label, bones=False):
             break
         v = volumes[i]
         check(c["bvseg_volume"] == i, f"{label}: collider {c.name} has index {c['bvseg_volume']}, not {i}")
-        check(c.name == expected_name(preset, name, v["shape"], i),
-              f"{label}: collider {i} ({v['shape']}) is named {c.name}")
+        check(
+            c.name == expected_name(preset, name, v["shape"], i),
+            f"{label}: collider {i} ({v['shape']}) is named {c.name}",
+        )
         params = json.loads(c["bvseg_params"])
-        check(all(params.get(k) == v[k] for k in v if k not in ("fraction", "protrusion")),
-              f"{label}: {c.name} holds another volume than bvseg's {i}")
+        check(
+            all(params.get(k) == v[k] for k in v if k not in ("fraction", "protrusion")),
+            f"{label}: {c.name} holds another volume than bvseg's {i}",
+        )
         check(c.parent is source, f"{label}: {c.name} is not parented to {source.name}")
         if bones:
             bone = nodes[v["bone"]] if isinstance(v.get("bone"), int) else v.get("bone")
-            check(c.parent_type == "BONE" and c.parent_bone == bone,
-                  f"{label}: {c.name} hangs on {c.parent_type} {c.parent_bone!r}, not bone {bone!r}")
+            check(
+                c.parent_type == "BONE" and c.parent_bone == bone,
+                f"{label}: {c.name} hangs on {c.parent_type} {c.parent_bone!r}, not bone {bone!r}",
+            )
         else:
             check(c.parent_type == "OBJECT", f"{label}: {c.name} parent type {c.parent_type}")
         check(c.display_type == "WIRE" and c.hide_render, f"{label}: {c.name} is drawn solid or rendered")
         rb = c.rigid_body
-        check(rb is not None and rb.type == "PASSIVE" and rb.collision_shape == RIGID[v["shape"]],
-              f"{label}: {c.name} rigid body {rb and rb.collision_shape}, not {RIGID[v['shape']]}")
+        check(
+            rb is not None and rb.type == "PASSIVE" and rb.collision_shape == RIGID[v["shape"]],
+            f"{label}: {c.name} rigid body {rb and rb.collision_shape}, not {RIGID[v['shape']]}",
+        )
     enclosure(bpy, meshes, cols, label)
     return cols
 
 
 def enclosure(bpy, meshes, cols, label):
     import numpy as np
+
     points = np.concatenate([world_vertices(bpy, m) for m in meshes])
     out, _ = outside_count(bpy, points, cols)
     check(out == 0, f"{label}: {out} of {len(points)} mesh vertices outside every collider")
@@ -311,8 +376,10 @@ def enclosure(bpy, meshes, cols, label):
 def run_op(bpy, **kw):
     t = time.time()
     result = bpy.ops.object.bvseg_colliders(**kw)
-    print(f"  bvseg_colliders({', '.join(f'{k}={v!r}' for k, v in kw.items())}) -> {result} "
-          f"in {time.time() - t:.1f} s")
+    print(
+        f"  bvseg_colliders({', '.join(f'{k}={v!r}' for k, v in kw.items())}) -> {result} "
+        f"in {time.time() - t:.1f} s"
+    )
     return result
 
 
@@ -335,11 +402,14 @@ def expect_error(bpy, text, **kw):
 
 # ---------------------------------------------------------------- the cases
 
+
 def test_presets(bpy, bvseg, tmp):
     """One mesh per preset, with a transform, each preset with another target."""
-    cases = [("spot.obj", "UNREAL", "physx", "LOCAL"),
-             ("bunny.obj", "GODOT", "primitives", "LOCAL"),
-             ("fourleg_2.obj", "PLAIN", "physx-hull", "WORLD")]
+    cases = [
+        ("spot.obj", "UNREAL", "physx", "LOCAL"),
+        ("bunny.obj", "GODOT", "primitives", "LOCAL"),
+        ("fourleg_2.obj", "PLAIN", "physx-hull", "WORLD"),
+    ]
     for mesh, preset, target, space in cases:
         reset(bpy)
         obj = import_obj(bpy, mesh)
@@ -360,7 +430,6 @@ def test_presets(bpy, bvseg, tmp):
             check(len(bpy.data.meshes) == 1 + len(cols), f"{len(bpy.data.meshes)} meshes after two runs")
             check_run(bpy, bvseg, tmp, obj, preset, [obj], "rerun")
             # Colliders shrunk by 1 % about their own centres leave vertices out.
-            import numpy as np
             points = world_vertices(bpy, obj)
             out, _ = outside_count(bpy, points, cols, shrink=0.99)
             check(out > 0, "colliders shrunk by 1 % still enclose every vertex: the test cannot fail")
@@ -385,8 +454,11 @@ def test_multi(bpy, bvseg, tmp):
 
 
 def deformed_meshes(bpy, arm):
-    return [m for m in bpy.context.scene.objects if m.type == "MESH" and any(
-        md.type == "ARMATURE" and md.object is arm for md in m.modifiers)]
+    return [
+        m
+        for m in bpy.context.scene.objects
+        if m.type == "MESH" and any(md.type == "ARMATURE" and md.object is arm for md in m.modifiers)
+    ]
 
 
 def test_armature(bpy, bvseg, tmp, character):
@@ -403,7 +475,7 @@ def test_armature(bpy, bvseg, tmp, character):
     arm.data.pose_position = "POSE"
     action = arm.animation_data.action if arm.animation_data else None
     if check(action is not None, f"{character}: the import has an action"):
-        start, end = (int(round(x)) for x in action.frame_range)
+        start, end = (round(x) for x in action.frame_range)
         for frame in sorted({start, (start + end) // 2, end}):
             bpy.context.scene.frame_set(frame)
             print(f"  frame {frame}")
@@ -442,11 +514,17 @@ def test_errors(bpy, bvseg, tmp, prefs):
     for name, body, text in [
         ("fails", 'echo "bvseg: error: $2: something is wrong" >&2; exit 2', "something is wrong"),
         ("garbage", 'while [ "$1" != "-o" ]; do shift; done; echo "{not json" > "$2"', "not JSON"),
-        ("noschema", 'while [ "$1" != "-o" ]; do shift; done; echo "{\\"volumes\\": []}" > "$2"',
-         "not a bvseg.volumes document"),
-        ("badvolume", 'while [ "$1" != "-o" ]; do shift; done; '
-         'echo "{\\"schema\\": \\"bvseg.volumes/2\\", \\"volumes\\": [{\\"shape\\": \\"torus\\"}]}" > "$2"',
-         "unknown volume shape"),
+        (
+            "noschema",
+            'while [ "$1" != "-o" ]; do shift; done; echo "{\\"volumes\\": []}" > "$2"',
+            "not a bvseg.volumes document",
+        ),
+        (
+            "badvolume",
+            'while [ "$1" != "-o" ]; do shift; done; '
+            """echo '{"schema": "bvseg.volumes/2", "volumes": [{"shape": "torus"}]}' > "$2\"""",
+            "unknown volume shape",
+        ),
     ]:
         fake = os.path.join(tmp, name)
         with open(fake, "w") as f:
@@ -489,6 +567,7 @@ class Stub:
                 self.log.append(op)
                 return op
             return Stub(self.log)
+
         return call
 
     def __setattr__(self, name, value):
@@ -515,6 +594,7 @@ def test_modal(bpy, bvseg, tmp):
     """The operator as the panel starts it (invoke, then modal on timer events): it ends with
     the colliders, and Esc stops a run without changing the scene."""
     import types
+
     print("modal")
     operator = sys.modules[ADDON + ".operator"]
     cls = operator.BVSEG_OT_colliders
@@ -527,9 +607,13 @@ def test_modal(bpy, bvseg, tmp):
 
     status = []
     wm = types.SimpleNamespace(
-        progress_begin=lambda a, b: None, progress_update=lambda v: None, progress_end=lambda: None,
-        event_timer_add=lambda step, window=None: Timer(), event_timer_remove=lambda t: None,
-        modal_handler_add=lambda op: None)
+        progress_begin=lambda a, b: None,
+        progress_update=lambda v: None,
+        progress_end=lambda: None,
+        event_timer_add=lambda step, window=None: Timer(),
+        event_timer_remove=lambda t: None,
+        modal_handler_add=lambda op: None,
+    )
     space = types.SimpleNamespace(status_text_set=lambda text: status.append(text))
 
     class Context:
@@ -539,18 +623,29 @@ def test_modal(bpy, bvseg, tmp):
             return getattr(bpy.context, name)
 
     reports = []
-    settings = {name: getattr(bpy.context.scene.bvseg, name) for name in sys.modules[ADDON + ".props"].SETTINGS}
+    settings = {
+        name: getattr(bpy.context.scene.bvseg, name) for name in sys.modules[ADDON + ".props"].SETTINGS
+    }
     settings.update(target="physx", naming="PLAIN", max_k=12)
-    fake = type("ModalOp", (), {
-        "invoke": cls.invoke, "modal": cls.modal, "_status": cls._status, "_end": cls._end,
-        "report": lambda self, kind, text: reports.append((set(kind), text)), **settings})()
+    fake = type(
+        "ModalOp",
+        (),
+        {
+            "invoke": cls.invoke,
+            "modal": cls.modal,
+            "_status": cls._status,
+            "_end": cls._end,
+            "report": lambda self, kind, text: reports.append((set(kind), text)),
+            **settings,
+        },
+    )()
     ctx = Context()
     result = fake.invoke(ctx, None)
     check(result == {"RUNNING_MODAL"}, f"invoke returned {result}")
     started = time.time()
     while result == {"RUNNING_MODAL"} and time.time() - started < 120:
         time.sleep(0.05)
-        result = fake.modal(ctx, types.SimpleNamespace(type="TIMER", timer=fake._timer))
+        result = fake.modal(ctx, types.SimpleNamespace(type="TIMER", value="NOTHING", timer=fake._timer))
     check(result == {"FINISHED"}, f"the modal run ended with {result}")
     check(any("bvseg 1/1: bunny" in s for s in status if s), f"no progress in the status bar: {status[:3]}")
     check(status and status[-1] is None, "the status bar text is not cleared")
@@ -559,12 +654,21 @@ def test_modal(bpy, bvseg, tmp):
     # Esc while bvseg runs: the process is killed, the colliders stay as they were.
     before = [c.name for c in colliders_of(obj)]
     settings.update(max_k=96, samples=400000)
-    fake = type("ModalOp", (), {
-        "invoke": cls.invoke, "modal": cls.modal, "_status": cls._status, "_end": cls._end,
-        "report": lambda self, kind, text: reports.append((set(kind), text)), **settings})()
+    fake = type(
+        "ModalOp",
+        (),
+        {
+            "invoke": cls.invoke,
+            "modal": cls.modal,
+            "_status": cls._status,
+            "_end": cls._end,
+            "report": lambda self, kind, text: reports.append((set(kind), text)),
+            **settings,
+        },
+    )()
     check(fake.invoke(ctx, None) == {"RUNNING_MODAL"}, "second invoke")
     process = fake._session.job.run.process
-    result = fake.modal(ctx, types.SimpleNamespace(type="ESC", timer=None))
+    result = fake.modal(ctx, types.SimpleNamespace(type="ESC", value="PRESS", timer=None))
     check(result == {"CANCELLED"}, f"Esc ended with {result}")
     check(process.poll() is not None, "Esc left bvseg running")
     check([c.name for c in colliders_of(obj)] == before, "Esc changed the colliders")
@@ -576,10 +680,16 @@ def main():
     ap.add_argument("--bvseg", required=True)
     ap.add_argument("--mode", choices=("legacy", "extension"), default="legacy")
     ap.add_argument("--zip", help="the extension zip (--mode extension)")
-    ap.add_argument("--character", action="append",
-                    help="skinned glTF of assets/characters to test (default RiggedSimple.glb, CesiumMan.glb)")
-    ap.add_argument("--only", help="comma list of the legacy mode's tests to run: presets, multi, armature, "
-                    "errors, panel, modal (default all)")
+    ap.add_argument(
+        "--character",
+        action="append",
+        help="skinned glTF of assets/characters to test (default RiggedSimple.glb, CesiumMan.glb)",
+    )
+    ap.add_argument(
+        "--only",
+        help="comma list of the legacy mode's tests to run: presets, multi, armature, "
+        "errors, panel, modal (default all)",
+    )
     args = ap.parse_args()
     bvseg = os.path.abspath(args.bvseg)
     if not os.access(bvseg, os.X_OK):
@@ -591,23 +701,29 @@ def main():
     os.environ["BLENDER_USER_SCRIPTS"] = os.path.join(tmp, "scripts")
     os.makedirs(os.path.join(tmp, "scripts", "addons"))
     started = time.time()
-    import bpy
+    import bpy  # isort: skip (first: it puts addon_utils on the path)
+
     import addon_utils
 
     print(f"Blender {bpy.app.version_string}, Python {sys.version.split()[0]}")
     global ADDON
     if args.mode == "legacy":
         ADDON = "bvseg_blender"
-        shutil.copytree(os.path.join(ROOT, "blender", "bvseg_blender"),
-                        os.path.join(tmp, "scripts", "addons", "bvseg_blender"))
+        shutil.copytree(
+            os.path.join(ROOT, "blender", "bvseg_blender"),
+            os.path.join(tmp, "scripts", "addons", "bvseg_blender"),
+        )
         bpy.utils.refresh_script_paths()
         module = addon_utils.enable(ADDON, default_set=True, handle_error=None)
-        check(module is not None and module.bl_info["name"] == "bvseg Colliders",
-              "the legacy add-on does not enable")
+        check(
+            module is not None and module.bl_info["name"] == "bvseg Colliders",
+            "the legacy add-on does not enable",
+        )
     else:
         ADDON = "bl_ext.user_default.bvseg_blender"
-        result = bpy.ops.extensions.package_install_files(filepath=os.path.abspath(args.zip),
-                                                          repo="user_default", enable_on_install=True)
+        result = bpy.ops.extensions.package_install_files(
+            filepath=os.path.abspath(args.zip), repo="user_default", enable_on_install=True
+        )
         check(result == {"FINISHED"}, f"extension install: {result}")
     registered = hasattr(bpy.types, "OBJECT_OT_bvseg_colliders") or "bvseg_colliders" in dir(bpy.ops.object)
     if not check(registered and ADDON in bpy.context.preferences.addons, f"{ADDON} is not enabled"):
@@ -620,13 +736,15 @@ def main():
             tests = {
                 "presets": lambda: test_presets(bpy, bvseg, tmp),
                 "multi": lambda: test_multi(bpy, bvseg, tmp),
-                "armature": lambda: [test_armature(bpy, bvseg, tmp, c)
-                                     for c in args.character or ["RiggedSimple.glb", "CesiumMan.glb"]],
+                "armature": lambda: [
+                    test_armature(bpy, bvseg, tmp, c)
+                    for c in args.character or ["RiggedSimple.glb", "CesiumMan.glb"]
+                ],
                 "errors": lambda: test_errors(bpy, bvseg, tmp, prefs),
                 "panel": lambda: test_panel(bpy, sys.modules[ADDON + ".ui"]),
                 "modal": lambda: test_modal(bpy, bvseg, tmp),
             }
-            for name in (args.only.split(",") if args.only else tests):
+            for name in args.only.split(",") if args.only else tests:
                 tests[name]()
         else:
             reset(bpy)
