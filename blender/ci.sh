@@ -3,7 +3,8 @@
 # 4.5 LTS as a Python module, CPython 3.11 like Blender's own), in a virtual environment under
 # target/ made on first use. It checks the extension's manifest and builds its zip with
 # Blender's own extension tool, then runs blender/tests/test_addon.py twice: the folder enabled
-# as a legacy add-on (every check), and the zip installed as an extension (one mesh).
+# as a legacy add-on (every check; with held-out meshes and game assets of ../shared when it is
+# there, or $BVSEG_SHARED), and the zip installed as an extension (one mesh).
 #
 #   bash blender/ci.sh [BVSEG]        # BVSEG: the release binary (default target/release/bvseg)
 #
@@ -52,6 +53,13 @@ run() {
     grep -vE '^(Freeing memory|Error: Not freed memory|[0-9:]+ \| INFO:|INFO |Info: |OBJ import)' "$out/log" || true
     return "$status"
 }
-run --mode legacy
+# Held-out meshes and game assets of the project's shared test data, when it is there.
+shared="${BVSEG_SHARED:-$root/../shared}"
+if [ -d "$shared/meshes" ] && [ -d "$shared/assets/kenney" ]; then
+    run --mode legacy --shared "$shared"
+else
+    echo "note: $shared/meshes or assets/kenney not found: the held-out shared cases were not run"
+    run --mode legacy
+fi
 run --mode extension --zip "$zip"
 echo "blender add-on: $((SECONDS - start)) s in all"

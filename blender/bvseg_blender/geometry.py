@@ -192,23 +192,29 @@ def cylinder_mesh(radius, half_length):
     return verts, faces
 
 
-def _vec(volume, key, n=3):
+def _bad(volume, key, what):
+    return VolumeError(f"{volume.get('shape', '?')} volume: '{key}' must be {what}")
+
+
+def _vec(volume, key):
+    """Three finite numbers."""
     try:
-        value = volume[key]
-        if n is None:
-            return float(value)
-        out = tuple(float(x) for x in value)
+        out = tuple(float(x) for x in volume[key])
     except (KeyError, TypeError, ValueError) as e:
-        raise VolumeError(f"{volume.get('shape', '?')} volume: bad or missing '{key}'") from e
-    if len(out) != n or not all(math.isfinite(x) for x in out):
-        raise VolumeError(f"{volume.get('shape', '?')} volume: '{key}' must be {n} finite numbers")
+        raise _bad(volume, key, "three numbers") from e
+    if len(out) != 3 or not all(math.isfinite(x) for x in out):
+        raise _bad(volume, key, "three finite numbers")
     return out
 
 
-def _positive(volume, key, allow_zero=False):
-    x = _vec(volume, key, None)
+def _length(volume, key, allow_zero=False):
+    """A finite positive number (or zero)."""
+    try:
+        x = float(volume[key])
+    except (KeyError, TypeError, ValueError) as e:
+        raise _bad(volume, key, "a number") from e
     if not math.isfinite(x) or x < 0.0 or (x == 0.0 and not allow_zero):
-        raise VolumeError(f"{volume.get('shape', '?')} volume: '{key}' must be positive")
+        raise _bad(volume, key, "positive")
     return x
 
 
@@ -221,12 +227,12 @@ def collider(volume):
         try:
             axes = [tuple(float(x) for x in row) for row in volume["axes"]]
         except (KeyError, TypeError, ValueError) as e:
-            raise VolumeError(f"{shape} volume: bad or missing 'axes'") from e
-        if len(axes) != 3 or any(len(a) != 3 for a in axes):
-            raise VolumeError(f"{shape} volume: 'axes' must be three rows of three numbers")
+            raise _bad(volume, "axes", "three rows of three numbers") from e
+        if len(axes) != 3 or any(len(a) != 3 or not all(map(math.isfinite, a)) for a in axes):
+            raise _bad(volume, "axes", "three rows of three finite numbers")
         radii = _vec(volume, "radii")
         if min(radii) <= 0.0:
-            raise VolumeError(f"{shape} volume: 'radii' must be positive")
+            raise _bad(volume, "radii", "positive")
         rotation = _frame_of_axes(axes)
         if shape == "obb":
             verts, faces = box_mesh(radii)
@@ -236,23 +242,23 @@ def collider(volume):
         return Collider(shape, center, rotation, verts, faces)
     if shape == "sphere":
         center = _vec(volume, "center")
-        r = _positive(volume, "radius")
+        r = _length(volume, "radius")
         unit, faces = _SPHERE
         return Collider(shape, center, IDENTITY, [(x * r, y * r, z * r) for x, y, z in unit], faces)
     if shape in ("capsule", "cylinder"):
         center = _vec(volume, "center")
         rotation = _frame_of_axis(_vec(volume, "axis"))
-        r = _positive(volume, "radius")
-        h = _positive(volume, "half_length", allow_zero=shape == "capsule")
+        r = _length(volume, "radius")
+        h = _length(volume, "half_length", allow_zero=shape == "capsule")
         verts, faces = capsule_mesh(r, h) if shape == "capsule" else cylinder_mesh(r, h)
         return Collider(shape, center, rotation, verts, faces)
     if shape == "hull":
         try:
             points = [tuple(float(x) for x in p) for p in volume["points"]]
         except (KeyError, TypeError, ValueError) as e:
-            raise VolumeError("hull volume: bad or missing 'points'") from e
+            raise _bad(volume, "points", "a list of [x, y, z]") from e
         if len(points) < 4 or any(len(p) != 3 or not all(map(math.isfinite, p)) for p in points):
-            raise VolumeError("hull volume: 'points' must be at least 4 finite [x, y, z]")
+            raise _bad(volume, "points", "at least 4 finite [x, y, z]")
         n = len(points)
         center = tuple(sum(p[i] for p in points) / n for i in range(3))
         return Collider(shape, center, IDENTITY, [_sub(p, center) for p in points], None)

@@ -147,7 +147,6 @@ def settings_properties():
             min=0.0,
             soft_max=1.0,
             precision=4,
-            subtype="DISTANCE",
             description="Grow every collider outward by this distance (fitting-space units), "
             "beyond the millionth of the largest coordinate always added for Blender's "
             "single precision (--margin)",

@@ -75,7 +75,7 @@ class VIEW3D_PT_bvseg(Panel):
             rigged = sum(1 for o in usable if o.type == "ARMATURE" or armature_of(o) is not None)
             n = sum(len(colliders.previous(o)) for o in usable)
             if rigged and s.per_bone:
-                layout.label(text="Armatures: one collider set per armature", icon="ARMATURE_DATA")
+                layout.label(text="Rigged meshes: colliders on their bones", icon="ARMATURE_DATA")
             if n:
                 layout.label(
                     text=f"Replaces {n} collider{'s' if n != 1 else ''} of an earlier run",

@@ -169,11 +169,22 @@ def test_geometry(geometry):
             check(inward == 0, f"{shape}: {inward} faces not facing outward")
             if shape == "ellipsoid":
                 check(len(world) <= 64, f"ellipsoid mesh has {len(world)} vertices (at most 64)")
-    try:
-        geometry.collider({"shape": "torus"})
-        check(False, "an unknown shape is refused")
-    except geometry.VolumeError:
-        pass
+    bad = [
+        {"shape": "torus"},
+        "not a volume",
+        {"shape": "sphere", "center": [0, 0, 0]},
+        {"shape": "sphere", "center": [0, 0, 0], "radius": -1},
+        {"shape": "sphere", "center": [0, float("nan"), 0], "radius": 1},
+        {"shape": "capsule", "center": [0, 0, 0], "axis": [0, 0, 1], "half_length": -1, "radius": 1},
+        {"shape": "obb", "center": [0, 0, 0], "axes": [[1, 0, 0], [0, 1, 0]], "radii": [1, 1, 1]},
+        {"shape": "hull", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]},
+    ]
+    for volume in bad:
+        try:
+            geometry.collider(volume)
+            check(False, f"the volume {volume} is not refused")
+        except geometry.VolumeError:
+            pass
 
 
 # ---------------------------------------------------------------- Blender scene helpers
@@ -385,7 +396,7 @@ def run_op(bpy, **kw):
 
 def expect_error(bpy, text, **kw):
     """The operator reports an error containing `text` (bpy.ops raises RuntimeError for an
-    error report) and changes nothing."""
+    error report), and raises nothing else."""
     try:
         result = bpy.ops.object.bvseg_colliders(**kw)
     except RuntimeError as e:
@@ -450,7 +461,39 @@ def test_multi(bpy, bvseg, tmp):
     run_op(bpy, target="parry", naming="UNREAL")
     for o in (a, b):
         check_run(bpy, bvseg, tmp, o, "UNREAL", [o], "multi")
-    check(not any(c.parent is a for c in colliders_of(b)), "multi: colliders mixed between the meshes")
+
+
+def test_shared(bpy, bvseg, tmp, shared):
+    """Held out: meshes of the shared test set that the add-on was not developed on, and CC0
+    game assets imported from glTF (several mesh objects in one call; a rigged character)."""
+    cases = [
+        ("meshes/chair_1.obj", "UNREAL", "physx-hull"),
+        ("meshes/octopus_1.obj", "GODOT", "primitives"),
+    ]
+    for path, preset, target in cases:
+        reset(bpy)
+        before = set(bpy.data.objects)
+        bpy.ops.wm.obj_import(filepath=os.path.join(shared, path))
+        (obj,) = set(bpy.data.objects) - before
+        obj.location = (-2.0, 5.0, 1.0)
+        obj.rotation_euler = (0.1, 0.2, -0.6)
+        select(bpy, [obj])
+        run_op(bpy, target=target, naming=preset)
+        check_run(bpy, bvseg, tmp, obj, preset, [obj], f"held-out {path}")
+    for asset in ("building-small-b.glb", "character-male-b.glb"):
+        reset(bpy)
+        bpy.ops.import_scene.gltf(filepath=os.path.join(shared, "assets", "kenney", asset))
+        arms = [o for o in bpy.data.objects if o.type == "ARMATURE"]
+        meshes = [o for o in bpy.data.objects if o.type == "MESH"]
+        select(bpy, arms or meshes)
+        run_op(bpy, target="physx", naming="UNREAL")
+        if arms:
+            for arm in arms:
+                arm.data.pose_position = "REST"
+                check_run(bpy, bvseg, tmp, arm, "UNREAL", deformed_meshes(bpy, arm), asset, bones=True)
+        else:
+            for m in meshes:
+                check_run(bpy, bvseg, tmp, m, "UNREAL", [m], asset)
 
 
 def deformed_meshes(bpy, arm):
@@ -686,9 +729,12 @@ def main():
         help="skinned glTF of assets/characters to test (default RiggedSimple.glb, CesiumMan.glb)",
     )
     ap.add_argument(
+        "--shared", help="the project's shared test data (meshes/, assets/kenney/): held-out cases"
+    )
+    ap.add_argument(
         "--only",
         help="comma list of the legacy mode's tests to run: presets, multi, armature, "
-        "errors, panel, modal (default all)",
+        "errors, panel, modal, shared (default all)",
     )
     args = ap.parse_args()
     bvseg = os.path.abspath(args.bvseg)
@@ -744,6 +790,8 @@ def main():
                 "panel": lambda: test_panel(bpy, sys.modules[ADDON + ".ui"]),
                 "modal": lambda: test_modal(bpy, bvseg, tmp),
             }
+            if args.shared:
+                tests["shared"] = lambda: test_shared(bpy, bvseg, tmp, os.path.abspath(args.shared))
             for name in args.only.split(",") if args.only else tests:
                 tests[name]()
         else:
