@@ -319,7 +319,12 @@ fn process_robot(
     // Several files run at once: no per-link lines, and the batch's pool for threads.
     let run = run_robot(path, options, None, args.params.timeout, true)?;
     run.write(dir)?;
-    let met = &run.tolerances_met;
+    let met: Vec<Option<bool>> = run
+        .links
+        .iter()
+        .flatten()
+        .map(|l| l.tolerances_met)
+        .collect();
     let tolerances_met = if met.contains(&Some(false)) {
         "false"
     } else if met.contains(&Some(true)) {
@@ -330,16 +335,19 @@ fn process_robot(
     Ok(Row {
         file: file_name(path),
         status: "done",
-        triangles: run.triangles.iter().sum::<usize>().to_string(),
+        triangles: run.total_triangles().to_string(),
         k: run.total_parts().to_string(),
         tov: String::new(),
         mov: String::new(),
         tolerances_met: tolerances_met.to_owned(),
-        message: format!(
+        message: std::iter::once(format!(
             "robot: {} links segmented, {} spheres, outputs in {base}/",
             run.links_segmented(),
             run.total_spheres()
-        ),
+        ))
+        .chain(run.warnings.iter().cloned())
+        .collect::<Vec<_>>()
+        .join("; "),
     })
 }
 

@@ -10,7 +10,8 @@ use anyhow::anyhow;
 use bvseg_core::{Cancel, Params};
 use bvseg_io::export::OutputFormat;
 use bvseg_io::robot::{
-    self, MeshSource, RobotEvent, RobotOptions, RobotRun, DEFAULT_SPHERES_PER_LINK,
+    self, MeshSource, PartBudget, RobotEvent, RobotOptions, RobotRun, DEFAULT_PARTS_PER_LINK,
+    DEFAULT_SPHERES_PER_LINK,
 };
 use clap::{Args, ValueEnum};
 
@@ -32,7 +33,8 @@ pub struct RobotBudgetArgs {
     #[arg(long, value_enum, default_value_t = SourceArg::Collision)]
     pub source: SourceArg,
 
-    /// Robots: most parts per link (sets --max-k for each link).
+    /// Robots: most parts per link (each link's --max-k is the smaller of this and
+    /// --max-k) [default: 5]
     #[arg(long, value_name = "N", conflicts_with = "total_parts", value_parser = clap::value_parser!(u64).range(1..=4096))]
     pub max_parts: Option<u64>,
 
@@ -60,8 +62,11 @@ impl RobotBudgetArgs {
                 SourceArg::Visual => MeshSource::Visual,
             },
             params,
-            max_parts: self.max_parts.map(|n| n as usize),
-            total_parts: self.total_parts.map(|n| n as usize),
+            parts: match (self.max_parts, self.total_parts) {
+                (_, Some(n)) => PartBudget::Total(n as usize),
+                (Some(n), None) => PartBudget::PerLink(n as usize),
+                (None, None) => PartBudget::PerLink(DEFAULT_PARTS_PER_LINK),
+            },
             spheres_per_link: self.spheres_per_link as usize,
             urdf_capsules: self.urdf_capsules,
         }
@@ -74,8 +79,8 @@ pub struct RobotArgs {
     #[arg(value_name = "ROBOT")]
     pub robot: PathBuf,
 
-    /// Directory to write <robot>.urdf, <robot>.xml, curobo.yml and links/<link>.json in
-    /// (created if missing).
+    /// Directory to write <robot>.urdf, <robot>.xml, curobo.yml, links/<link>.json and
+    /// manifest.json (last) in (created if missing).
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
 
@@ -104,6 +109,9 @@ pub fn run(args: &RobotArgs) -> anyhow::Result<ExitCode> {
         args.quiet,
     )?;
     run.write(&args.output)?;
+    for w in &run.warnings {
+        eprintln!("bvseg: warning: {w}");
+    }
     if !args.quiet {
         eprintln!(
             "bvseg: {}: {} links, {} parts, {} spheres in {:.1} s -> {}",
@@ -132,20 +140,12 @@ pub fn run_robot(
     let timer = timeout.map(|t| Timer::start(t, &name, cancel.clone(), false));
     let result = common::in_pool(threads, || {
         robot::segment_robot(path, options, &cancel, |e| {
-            if let (
-                false,
-                RobotEvent::Done {
-                    link,
-                    parts,
-                    spheres,
-                },
-            ) = (quiet, e)
-            {
+            if let (false, RobotEvent::Done { link, result }) = (quiet, e) {
                 eprintln!(
                     "bvseg: link {link}: {} parts ({}), {} spheres",
-                    parts.parts.len(),
-                    parts.kinds,
-                    spheres.parts.len()
+                    result.parts.parts.len(),
+                    result.parts.kinds,
+                    result.spheres.parts.len()
                 );
             }
         })

@@ -1,7 +1,9 @@
 //! cuRobo's robot file fragment: collision spheres per link and the adjacent links to ignore.
 use std::fmt::Write;
 
-use super::{LinkResults, Robot};
+use bvseg_core::Segmentation;
+
+use super::Robot;
 
 /// A YAML key, quoted when it is not a plain word.
 fn key(s: &str) -> String {
@@ -19,14 +21,14 @@ fn key(s: &str) -> String {
 /// `spheres` (each link's sphere-only segmentation, by link index) and the link's kept
 /// primitives (a volume that is not a sphere is written as the sphere around its bounding
 /// box), and `self_collision_ignore: {LINK: [...]}` listing each link's parent and children.
-pub fn to_curobo(robot: &Robot, spheres: LinkResults) -> String {
+pub(crate) fn to_curobo(robot: &Robot, spheres: &[Option<&Segmentation>]) -> String {
     let mut s = format!(
         "# {}: collision spheres for {}\ncollision_spheres:\n",
         crate::GENERATOR,
         robot.name
     );
     for (i, link) in robot.links.iter().enumerate() {
-        let seg = spheres.get(i).and_then(Option::as_ref);
+        let seg = spheres.get(i).copied().flatten();
         let volumes: Vec<&bvseg_core::BoundingVolume> = seg
             .into_iter()
             .flat_map(|s| s.parts.iter().map(|p| &p.volume))

@@ -1,20 +1,40 @@
 //! A whole robot run: read the robot, segment each link's meshes in the link's frame (the
-//! primitives for the URDF and MJCF, spheres for cuRobo), and render every output. The
-//! command line (`bvseg robot`, robots in `bvseg batch`) and the Python package
-//! (`bvseg.robot`) all go through [`segment_robot`] and [`RobotRun::write`].
-use std::path::{Path, PathBuf};
+//! primitives for the URDF and MJCF, spheres for cuRobo), one result per link. The command
+//! line (`bvseg robot`, robots in `bvseg batch`) and the Python package (`bvseg.robot`) all
+//! go through [`segment_robot`], then [`RobotRun::write`].
+use std::path::Path;
 
 use bvseg_core::{Cancel, Kinds, Params, Segmentation, Segmenter, Shape, Step};
 
-use super::{read_robot, share_parts, to_curobo, to_mjcf_robot, to_urdf, MeshSource, Robot};
+use super::output::{LinkResult, RobotRun};
+use super::paths::file_safe;
+use super::{read_robot, share_parts, MeshSource, Robot};
 use crate::IoError;
 
 /// Default of [`RobotOptions::spheres_per_link`].
 pub const DEFAULT_SPHERES_PER_LINK: usize = 16;
 
-/// The output written last by [`RobotRun::write`]: a robot's outputs are all there when it
-/// exists (each file is written atomically), which is how a batch knows a robot is done.
-pub const DONE_FILE: &str = "curobo.yml";
+/// Default per-link budget ([`PartBudget::PerLink`]): engines and planners want a few
+/// primitives per link, and on the measured robots (docs/robots.md, "Budgets") more parts
+/// per link tighten the colliders less than each costs.
+pub const DEFAULT_PARTS_PER_LINK: usize = 5;
+
+/// How many parts the links get.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PartBudget {
+    /// At most this many per link (each link's `max_k` is the smaller of this and the
+    /// parameters' `max_k`).
+    PerLink(usize),
+    /// At most this many for the whole robot, shared among its links by their volume, each
+    /// at least one ([`share_parts`]).
+    Total(usize),
+}
+
+impl Default for PartBudget {
+    fn default() -> Self {
+        PartBudget::PerLink(DEFAULT_PARTS_PER_LINK)
+    }
+}
 
 /// What [`segment_robot`] does. Write it as a struct literal ending in
 /// `..RobotOptions::default()`, so that the code keeps compiling when fields are added.
@@ -26,11 +46,8 @@ pub struct RobotOptions {
     /// has (box, sphere, cylinder, and capsule with `urdf_capsules`), so that the URDF and
     /// the MJCF hold the same volumes; boxes when none of them is asked for.
     pub params: Params,
-    /// Most parts per link (each link's `max_k`, and `k` at most this).
-    pub max_parts: Option<usize>,
-    /// Most parts for the whole robot, shared among its links by volume, each at least one
-    /// ([`share_parts`]); instead of `max_parts`.
-    pub total_parts: Option<usize>,
+    /// How many parts the links get (default: [`DEFAULT_PARTS_PER_LINK`] per link).
+    pub parts: PartBudget,
     /// Most spheres per link in `curobo.yml`.
     pub spheres_per_link: usize,
     /// Write capsules as URDF 1.1 `<capsule>` (otherwise URDF gets no capsules).
@@ -42,8 +59,7 @@ impl Default for RobotOptions {
         Self {
             source: MeshSource::Collision,
             params: Params::default(),
-            max_parts: None,
-            total_parts: None,
+            parts: PartBudget::default(),
             spheres_per_link: DEFAULT_SPHERES_PER_LINK,
             urdf_capsules: false,
         }
@@ -64,18 +80,6 @@ pub enum RobotError {
     /// The segmentation's parameters are invalid (the message names the parameter).
     #[error("{0}")]
     Params(#[source] bvseg_core::ParamError),
-    /// A link's meshes, placed in its frame, enclose no volume.
-    #[error("{file}: link {link:?}: its meshes enclose no volume (flat, open or degenerate: {triangles} triangles, {open_edges} open edges)")]
-    NoVolume {
-        /// The robot file.
-        file: String,
-        /// The link.
-        link: String,
-        /// Its triangles.
-        triangles: usize,
-        /// Its open edges.
-        open_edges: usize,
-    },
     /// A link's segmentation failed, or was cancelled ([`bvseg_core::Error::Cancelled`]).
     #[error("{file}: link {link:?}: {source}")]
     Segment {
@@ -120,101 +124,9 @@ pub enum RobotEvent<'a> {
     Done {
         /// The link.
         link: &'a str,
-        /// Its primitives.
-        parts: &'a Segmentation,
-        /// Its spheres.
-        spheres: &'a Segmentation,
+        /// Its result.
+        result: &'a LinkResult,
     },
-}
-
-/// A robot with its links segmented ([`segment_robot`]), ready to be written.
-#[derive(Debug, Clone)]
-pub struct RobotRun {
-    /// The robot as read.
-    pub robot: Robot,
-    /// The outputs' file stem: the robot's name made safe for a file name, else the file's.
-    pub stem: String,
-    /// Each link's primitives, by link index (`None` for a link without meshes).
-    pub parts: Vec<Option<Segmentation>>,
-    /// Each link's cuRobo spheres, by link index.
-    pub spheres: Vec<Option<Segmentation>>,
-    /// Each link's triangles (after loading), by link index (0 without meshes).
-    pub triangles: Vec<usize>,
-    /// Whether each link's tolerance-mode run met its tolerances (`None` with a fixed `k`
-    /// or without meshes), by link index.
-    pub tolerances_met: Vec<Option<bool>>,
-    /// Whether capsules are written as URDF 1.1 `<capsule>` ([`RobotOptions::urdf_capsules`]).
-    pub urdf_capsules: bool,
-}
-
-impl RobotRun {
-    /// Every output, as a path relative to the output directory and its bytes, in writing
-    /// order: `links/<link>.json` for each segmented link, `<stem>.urdf`, `<stem>.xml`, and
-    /// [`DONE_FILE`] last.
-    pub fn files(&self) -> Vec<(PathBuf, Vec<u8>)> {
-        let mut files = Vec::new();
-        for (i, seg) in self.parts.iter().enumerate() {
-            if let (Some(seg), Some(rel)) = (seg, self.volumes_file(i)) {
-                files.push((rel, crate::to_json_string(seg).into_bytes()));
-            }
-        }
-        files.push((
-            PathBuf::from(format!("{}.urdf", self.stem)),
-            to_urdf(&self.robot, &self.parts, self.urdf_capsules).into_bytes(),
-        ));
-        files.push((
-            PathBuf::from(format!("{}.xml", self.stem)),
-            to_mjcf_robot(&self.robot, &self.parts).into_bytes(),
-        ));
-        files.push((
-            PathBuf::from(DONE_FILE),
-            to_curobo(&self.robot, &self.spheres).into_bytes(),
-        ));
-        files
-    }
-
-    /// The volumes document of link `link` (by index), relative to the output directory:
-    /// `links/<link>.json` with the name made safe for a file; `None` for a link that was
-    /// not segmented.
-    pub fn volumes_file(&self, link: usize) -> Option<PathBuf> {
-        let l = self.robot.links.get(link)?;
-        self.parts.get(link)?.as_ref()?;
-        Some(Path::new("links").join(format!("{}.json", file_safe(&l.name))))
-    }
-
-    /// Writes every output of [`RobotRun::files`] under `dir` (created if missing), each
-    /// atomically, [`DONE_FILE`] last; returns the paths written.
-    ///
-    /// # Errors
-    ///
-    /// [`IoError::Io`] when a directory cannot be created or a file written.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, IoError> {
-        let links = dir.join("links");
-        std::fs::create_dir_all(&links)
-            .map_err(|e| IoError::io(&links.display().to_string(), "create the directory", e))?;
-        let mut written = Vec::new();
-        for (rel, bytes) in self.files() {
-            let path = dir.join(rel);
-            crate::write_atomic(&path, &bytes)?;
-            written.push(path);
-        }
-        Ok(written)
-    }
-
-    /// The number of links with meshes.
-    pub fn links_segmented(&self) -> usize {
-        self.parts.iter().flatten().count()
-    }
-
-    /// Parts over all links.
-    pub fn total_parts(&self) -> usize {
-        self.parts.iter().flatten().map(|s| s.parts.len()).sum()
-    }
-
-    /// Spheres over all links.
-    pub fn total_spheres(&self) -> usize {
-        self.spheres.iter().flatten().map(|s| s.parts.len()).sum()
-    }
 }
 
 /// The kinds of `kinds` that URDF has (box, sphere, cylinder, and capsule with `capsules`);
@@ -234,15 +146,16 @@ fn urdf_kinds(kinds: Kinds, capsules: bool) -> Kinds {
 /// Reads the robot at `path` ([`read_robot`]), loads every link's meshes (so that a bad one
 /// fails before any slow work), and segments each link with meshes twice in its own frame:
 /// its primitives with `options.params` (kinds narrowed to URDF's, budgets from
-/// `max_parts` or `total_parts`), and its spheres for cuRobo (at most `spheres_per_link`,
-/// without hierarchy). `cancel` stops the run at the next check; `on_event` hears each start,
-/// refinement step and finished link. Run it inside a rayon pool to bound its threads.
+/// `options.parts`), and its spheres for cuRobo (at most `spheres_per_link`, without
+/// hierarchy). A link whose meshes enclose no volume is not segmented: its collisions stay
+/// as they are, and the run's warnings say so. `cancel` stops the run at the next check;
+/// `on_event` hears each start, refinement step and finished link. Run it inside a rayon pool
+/// to bound its threads.
 ///
 /// # Errors
 ///
 /// [`RobotError::Io`] for the robot file or a link's mesh (one line naming the file, and the
 /// link), [`RobotError::Options`] or [`RobotError::Params`] for options out of range,
-/// [`RobotError::NoVolume`] for a link whose meshes enclose no volume,
 /// [`RobotError::Segment`] when a link's segmentation fails or is cancelled.
 pub fn segment_robot(
     path: impl AsRef<Path>,
@@ -255,65 +168,53 @@ pub fn segment_robot(
             "spheres per link must be at least 1".into(),
         ));
     }
-    if options.max_parts == Some(0) || options.total_parts == Some(0) {
+    if matches!(options.parts, PartBudget::PerLink(0) | PartBudget::Total(0)) {
         return Err(RobotError::Options(
             "the parts budget (max parts, total parts) must be at least 1".into(),
-        ));
-    }
-    if options.max_parts.is_some() && options.total_parts.is_some() {
-        return Err(RobotError::Options(
-            "max parts and total parts cannot be combined: give a budget per link or for the robot"
-                .into(),
         ));
     }
     options.params.validate().map_err(RobotError::Params)?;
     let robot = read_robot(path, options.source)?;
     let stem = robot_stem(&robot)?;
+    let mut warnings = robot.warnings.clone();
     let mut meshes = Vec::with_capacity(robot.links.len());
     for link in &robot.links {
-        let m = robot.link_mesh(link)?;
-        if let Some(m) = &m {
-            if m.encloses_no_volume() {
-                return Err(RobotError::NoVolume {
-                    file: robot.file.clone(),
-                    link: link.name.clone(),
-                    triangles: m.report.triangles,
-                    open_edges: m.report.open_edges,
-                });
+        let mut m = robot.link_mesh(link)?;
+        if let Some(mesh) = &m {
+            if mesh.encloses_no_volume() {
+                warnings.push(format!(
+                    "{}: link {:?}: its meshes enclose no volume (flat, open or degenerate: {} \
+                     triangles, {} open edges): its collisions are left as they are",
+                    robot.file, link.name, mesh.report.triangles, mesh.report.open_edges
+                ));
+                m = None;
             }
         }
         meshes.push(m);
     }
-    let budgets: Vec<Option<usize>> = match options.total_parts {
-        Some(total) => {
+    let budgets: Vec<usize> = match options.parts {
+        PartBudget::Total(total) => {
             let volumes: Vec<Option<f64>> = meshes
                 .iter()
                 .map(|m| m.as_ref().map(|m| m.report.volume))
                 .collect();
-            share_parts(&volumes, total).into_iter().map(Some).collect()
+            share_parts(&volumes, total)
         }
-        None => vec![options.max_parts; meshes.len()],
+        PartBudget::PerLink(n) => vec![n; meshes.len()],
     };
     let base = &options.params;
-    let n = robot.links.len();
-    let (mut parts, mut spheres) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let (mut triangles, mut tolerances_met) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let mut links = Vec::with_capacity(robot.links.len());
     for (i, (link, mesh)) in robot.links.iter().zip(&meshes).enumerate() {
         let Some(mesh) = mesh else {
-            parts.push(None);
-            spheres.push(None);
-            triangles.push(0);
-            tolerances_met.push(None);
+            links.push(None);
             continue;
         };
         let mut p = Params {
             kinds: urdf_kinds(base.kinds, options.urdf_capsules),
             ..base.clone()
         };
-        if let Some(b) = budgets[i] {
-            p.max_k = b.max(1);
-            p.k = p.k.map(|k| k.min(p.max_k));
-        }
+        p.max_k = p.max_k.min(budgets[i]).max(1);
+        p.k = p.k.map(|k| k.min(p.max_k));
         let sp = Params {
             kinds: Kinds::SPHERE,
             max_k: options.spheres_per_link,
@@ -336,25 +237,25 @@ pub fn segment_robot(
                 },
             })
         };
-        let seg = one(&p, false)?;
-        let sph = one(&sp, true)?;
+        let parts = one(&p, false)?;
+        let spheres = one(&sp, true)?;
+        let result = LinkResult {
+            tolerances_met: parts.tolerances_met(&p),
+            triangles: mesh.mesh.triangles().len(),
+            parts,
+            spheres,
+        };
         on_event(RobotEvent::Done {
             link: &link.name,
-            parts: &seg,
-            spheres: &sph,
+            result: &result,
         });
-        triangles.push(mesh.mesh.triangles().len());
-        tolerances_met.push(seg.tolerances_met(&p));
-        parts.push(Some(seg));
-        spheres.push(Some(sph));
+        links.push(Some(result));
     }
     Ok(RobotRun {
         robot,
         stem,
-        parts,
-        spheres,
-        triangles,
-        tolerances_met,
+        links,
+        warnings,
         urdf_capsules: options.urdf_capsules,
     })
 }
@@ -391,22 +292,6 @@ fn robot_stem(robot: &Robot) -> Result<String, RobotError> {
     Ok(stem)
 }
 
-/// A name with path separators and other awkward characters replaced by `_`, without
-/// leading dots (no hidden files, no `..`).
-pub(crate) fn file_safe(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_alphanumeric() || matches!(c, '_' | '-' | '.') {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect::<String>()
-        .trim_start_matches('.')
-        .to_owned()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -419,11 +304,5 @@ mod tests {
             .shapes()
             .any(|s| s == Shape::Capsule));
         assert_eq!(urdf_kinds(Kinds::only(Shape::Ellipsoid), false), Kinds::OBB);
-    }
-
-    #[test]
-    fn names_are_safe_for_files() {
-        assert_eq!(file_safe("../a b/c"), "_a_b_c");
-        assert_eq!(file_safe("link_1.x"), "link_1.x");
     }
 }

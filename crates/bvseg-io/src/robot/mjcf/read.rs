@@ -1,0 +1,745 @@
+//! Reading an MJCF robot as MuJoCo compiles it: the world body and every body as links (the
+//! world first, as `world`), each body's first joint as the joint to its parent, each
+//! colliding mesh geom's vertices placed in its body's frame, each colliding primitive kept.
+//! Followed as MuJoCo follows them: `<include>`s, `<compiler angle eulerseq meshdir assetdir
+//! strippath autolimits inertiafromgeom inertiagrouprange>`, nested `<default>` classes with
+//! `class` and `childclass` (geom, mesh and joint defaults), `<frame>`s, mesh `scale`,
+//! `refpos` and `refquat`.
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use bvseg_core::{BoundingVolume, Shape};
+use glam::{DAffine3, DMat3, DQuat, DVec3};
+use roxmltree::Node;
+
+use super::files::{self, File};
+use super::orient::{euler_sequence, z_to, Angles, ORIENTATIONS};
+use super::{DirAttr, Insert, Site, Source};
+use crate::robot::geometry::{numbers, vec3};
+use crate::robot::model::{self, Joint, JointKind, Link, MeshRef, Robot};
+use crate::robot::paths::resolve_mesh;
+use crate::robot::{MeshSource, RobotFormat};
+use crate::IoError;
+
+/// The primitive geom types a link keeps (planes, height fields and SDFs are not a link's
+/// solid).
+const PRIMITIVES: [&str; 5] = ["sphere", "capsule", "cylinder", "box", "ellipsoid"];
+
+/// Reads the MJCF robot at `path` (its text `text`, named `name` in messages).
+pub(crate) fn parse(
+    path: &Path,
+    name: &str,
+    text: String,
+    source: MeshSource,
+) -> Result<Robot, IoError> {
+    let files = files::load(path, name, text)?;
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let read = {
+        let tree = Tree::new(&files)?;
+        let root = tree.root();
+        if root.1.tag_name().name() != "mujoco" {
+            return Err(IoError::Robot {
+                name: name.to_owned(),
+                message: format!(
+                    "the root element is <{}>, not <mujoco>",
+                    root.1.tag_name().name()
+                ),
+            });
+        }
+        let ctx = Ctx::new(&tree, name, &dir, source)?;
+        let mut out = Out::default();
+        ctx.world(&mut out)?;
+        let model = root
+            .1
+            .attribute("model")
+            .unwrap_or("robot")
+            .to_owned();
+        (model, ctx.dirs, ctx.has_meshdir, ctx.has_texturedir, out)
+    };
+    let (model, dirs, has_meshdir, has_texturedir, out) = read;
+    Ok(Robot {
+        name: model,
+        file: name.to_owned(),
+        format: RobotFormat::Mjcf,
+        links: out.links,
+        joints: out.joints,
+        warnings: out.warnings,
+        source: model::Source::Mjcf(Source {
+            files,
+            dir: canonical_dir(&dir),
+            sites: out.sites,
+            inserts: out.inserts,
+            from_geoms: out.from_geoms,
+            dirs,
+            has_meshdir,
+            has_texturedir,
+            names: out.names,
+        }),
+    })
+}
+
+/// The files parsed, walked as one document.
+struct Tree<'t> {
+    files: &'t [File],
+    docs: Vec<roxmltree::Document<'t>>,
+}
+
+/// An element, and the index of the file it is written in.
+type El<'d, 't> = (usize, Node<'d, 't>);
+
+impl<'t> Tree<'t> {
+    fn new(files: &'t [File]) -> Result<Self, IoError> {
+        let docs = files
+            .iter()
+            .map(|f| {
+                roxmltree::Document::parse(&f.text).map_err(|e| IoError::Robot {
+                    name: f.name.clone(),
+                    message: e.to_string(),
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self { files, docs })
+    }
+
+    fn root(&self) -> El<'_, 't> {
+        (0, self.docs[0].root_element())
+    }
+
+    /// The child elements of an element, each `<include>` replaced by the children of the
+    /// included file's root.
+    fn kids<'d>(&'d self, (f, node): El<'d, 't>) -> Vec<El<'d, 't>> {
+        let mut out = Vec::new();
+        for c in node.children().filter(|n| n.is_element()) {
+            if !c.has_tag_name("include") {
+                out.push((f, c));
+                continue;
+            }
+            if let Some(inc) = self.files[f].includes.iter().find(|i| i.element == c.range()) {
+                let root = self.docs[inc.file].root_element();
+                out.extend(self.kids((inc.file, root)));
+            }
+        }
+        out
+    }
+}
+
+/// The attributes a default class gives geoms, meshes and joints (a class inherits its
+/// parent's).
+#[derive(Debug, Clone, Default)]
+struct Defaults {
+    geom: BTreeMap<String, String>,
+    mesh: BTreeMap<String, String>,
+    joint: BTreeMap<String, String>,
+}
+
+/// A `<mesh>` asset.
+#[derive(Debug, Clone)]
+struct Asset {
+    /// Its file as written; `None` for a mesh given by vertices in the file.
+    file: Option<String>,
+    scale: DVec3,
+    /// Its `refpos` and `refquat`: file coordinates `v` are taken as `refquat⁻¹ (v - refpos)`.
+    reference: Option<DAffine3>,
+}
+
+/// What the whole model sets, read before the bodies.
+struct Ctx<'d, 't> {
+    tree: &'d Tree<'t>,
+    name: &'d str,
+    source: MeshSource,
+    angles: Angles,
+    autolimits: bool,
+    meshdir: PathBuf,
+    strippath: bool,
+    /// `inertiafromgeom`: `Some(true)` always, `Some(false)` never, `None` for bodies
+    /// without an `<inertial>` (MuJoCo's `auto`).
+    inertia_from_geoms: Option<bool>,
+    inertia_groups: (i64, i64),
+    classes: BTreeMap<String, Defaults>,
+    assets: BTreeMap<String, Asset>,
+    dirs: Vec<DirAttr>,
+    has_meshdir: bool,
+    has_texturedir: bool,
+}
+
+/// What reading the bodies gives.
+#[derive(Default)]
+struct Out {
+    links: Vec<Link>,
+    joints: Vec<Joint>,
+    warnings: Vec<String>,
+    sites: Vec<Site>,
+    inserts: Vec<Option<Insert>>,
+    from_geoms: Vec<bool>,
+    names: BTreeSet<String>,
+}
+
+impl<'d, 't> Ctx<'d, 't> {
+    fn new(
+        tree: &'d Tree<'t>,
+        name: &'d str,
+        dir: &Path,
+        source: MeshSource,
+    ) -> Result<Self, IoError> {
+        let bad = |message: String| IoError::Robot {
+            name: name.to_owned(),
+            message,
+        };
+        let top = tree.kids(tree.root());
+        // Every <compiler> counts, a later attribute over an earlier one.
+        let mut compiler: BTreeMap<&str, &str> = BTreeMap::new();
+        let mut dirs = Vec::new();
+        for (f, c) in top.iter().filter(|(_, n)| n.has_tag_name("compiler")) {
+            for a in c.attributes() {
+                compiler.insert(a.name(), a.value());
+                if matches!(a.name(), "meshdir" | "texturedir" | "assetdir") {
+                    dirs.push(DirAttr {
+                        file: *f,
+                        value: a.range_value(),
+                        text: a.value().to_owned(),
+                    });
+                }
+            }
+        }
+        let get = |a: &str| compiler.get(a).copied();
+        let seq = get("eulerseq").unwrap_or("xyz");
+        let angles = Angles {
+            degrees: get("angle") != Some("radian"),
+            eulerseq: euler_sequence(seq).ok_or_else(|| {
+                bad(format!(
+                    "compiler eulerseq {seq:?}: expected three of x, y, z, X, Y, Z"
+                ))
+            })?,
+        };
+        let meshdir = get("meshdir")
+            .or(get("assetdir"))
+            .map_or(dir.to_path_buf(), |m| dir.join(m));
+        let inertia_groups = match get("inertiagrouprange") {
+            Some(r) => match numbers(r, "compiler inertiagrouprange", name)?[..] {
+                [a, b] => (a as i64, b as i64),
+                _ => {
+                    return Err(bad(format!(
+                        "compiler inertiagrouprange {r:?}: expected 2 numbers"
+                    )))
+                }
+            },
+            None => (0, 5),
+        };
+        let mut classes = BTreeMap::new();
+        for d in top.iter().filter(|(_, n)| n.has_tag_name("default")) {
+            defaults(tree, *d, &Defaults::default(), &mut classes);
+        }
+        let mut ctx = Ctx {
+            tree,
+            name,
+            source,
+            angles,
+            autolimits: get("autolimits") != Some("false"),
+            meshdir,
+            strippath: get("strippath") == Some("true"),
+            inertia_from_geoms: match get("inertiafromgeom") {
+                Some("true") => Some(true),
+                Some("false") => Some(false),
+                _ => None,
+            },
+            inertia_groups,
+            classes,
+            assets: BTreeMap::new(),
+            has_meshdir: get("meshdir").or(get("assetdir")).is_some(),
+            has_texturedir: get("texturedir").or(get("assetdir")).is_some(),
+            dirs,
+        };
+        for (_, m) in top
+            .iter()
+            .filter(|(_, n)| n.has_tag_name("asset"))
+            .flat_map(|a| tree.kids(*a))
+            .filter(|(_, n)| n.has_tag_name("mesh"))
+        {
+            let class = m.attribute("class").unwrap_or("main");
+            let d = ctx.class(class, "mesh asset")?;
+            let attr = |a: &str| m.attribute(a).or(d.mesh.get(a).map(String::as_str));
+            let file = attr("file");
+            let mesh_name = match (m.attribute("name"), file) {
+                (Some(n), _) => n.to_owned(),
+                (None, Some(f)) => Path::new(f)
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                (None, None) => continue,
+            };
+            let scale = vec3(attr("scale"), DVec3::ONE, "mesh scale", name)?;
+            let refpos = vec3(attr("refpos"), DVec3::ZERO, "mesh refpos", name)?;
+            let refquat = match attr("refquat") {
+                Some(q) => ctx.angles.orientation(|a| (a == "quat").then_some(q), name)?,
+                None => DQuat::IDENTITY,
+            };
+            let reference = (refpos != DVec3::ZERO || refquat != DQuat::IDENTITY).then(|| {
+                let inv = refquat.inverse();
+                DAffine3::from_rotation_translation(inv, -(inv * refpos))
+            });
+            let asset = Asset {
+                file: file.map(str::to_owned),
+                scale,
+                reference,
+            };
+            ctx.assets.insert(mesh_name, asset);
+        }
+        Ok(ctx)
+    }
+
+    fn bad(&self, message: String) -> IoError {
+        IoError::Robot {
+            name: self.name.to_owned(),
+            message,
+        }
+    }
+
+    /// The defaults of `class` (`what` names who asks, for the message).
+    fn class(&self, class: &str, what: &str) -> Result<&Defaults, IoError> {
+        static NONE: std::sync::OnceLock<Defaults> = std::sync::OnceLock::new();
+        match self.classes.get(class) {
+            Some(d) => Ok(d),
+            None if class == "main" => Ok(NONE.get_or_init(Defaults::default)),
+            None => Err(self.bad(format!("{what}: unknown default class {class:?}"))),
+        }
+    }
+
+    /// The world body (link `world`) and the bodies in it.
+    fn world(&self, out: &mut Out) -> Result<(), IoError> {
+        let worlds: Vec<El> = self
+            .tree
+            .kids(self.tree.root())
+            .into_iter()
+            .filter(|(_, n)| n.has_tag_name("worldbody"))
+            .collect();
+        if worlds.is_empty() {
+            return Err(self.bad("no <worldbody>".into()));
+        }
+        out.links.push(Link {
+            name: "world".into(),
+            meshes: Vec::new(),
+            kept: Vec::new(),
+        });
+        out.inserts.push(None);
+        out.from_geoms.push(false);
+        for w in worlds {
+            self.walk(w, 0, DAffine3::IDENTITY, "main", out)?;
+        }
+        Ok(())
+    }
+
+    /// Reads the children of `el` (a body, the world body or a `<frame>`) into link `link`:
+    /// its geoms, placed by `frame` (the element's frame in the link's), its `<frame>`s with
+    /// their transform and `childclass`, its child bodies.
+    fn walk(
+        &self,
+        el: El<'d, 't>,
+        link: usize,
+        frame: DAffine3,
+        class: &str,
+        out: &mut Out,
+    ) -> Result<(), IoError> {
+        for kid in self.tree.kids(el) {
+            match kid.1.tag_name().name() {
+                "geom" => self.geom(kid, link, frame, class, out)?,
+                "frame" => {
+                    let f = frame * self.angles.frame(|a| kid.1.attribute(a), self.name)?;
+                    let cc = kid.1.attribute("childclass").unwrap_or(class);
+                    self.class(cc, &format!("body {:?}", out.links[link].name))?;
+                    self.walk(kid, link, f, cc, out)?;
+                }
+                "body" => self.body(kid, link, frame, class, out)?,
+                tag @ ("replicate" | "attach") => out.warnings.push(format!(
+                    "{}: body {:?}: <{tag}> is not read: the collision meshes it makes are left \
+                     as they are",
+                    self.name, out.links[link].name
+                )),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// A body: a link, the joint to its parent `parent` (placed by `frame`, the frame its
+    /// `pos` is given in, in the parent's), and what it holds.
+    fn body(
+        &self,
+        el: El<'d, 't>,
+        parent: usize,
+        frame: DAffine3,
+        class: &str,
+        out: &mut Out,
+    ) -> Result<(), IoError> {
+        let node = el.1;
+        let link_name = node
+            .attribute("name")
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("body_{}", out.links.len()));
+        let class = node.attribute("childclass").unwrap_or(class);
+        self.class(class, &format!("body {link_name:?}"))?;
+        let origin = frame * self.angles.frame(|a| node.attribute(a), self.name)?;
+        let index = out.links.len();
+        let kids = self.tree.kids(el);
+        out.links.push(Link {
+            name: link_name.clone(),
+            meshes: Vec::new(),
+            kept: Vec::new(),
+        });
+        let text = &self.tree.files[el.0].text;
+        out.inserts.push(
+            text[node.range()]
+                .rfind("</")
+                .map(|close| Insert {
+                    file: el.0,
+                    at: node.range().start + close,
+                }),
+        );
+        let has_inertial = kids.iter().any(|(_, n)| n.has_tag_name("inertial"));
+        out.from_geoms
+            .push(self.inertia_from_geoms.unwrap_or(!has_inertial));
+        let joints: Vec<El> = kids
+            .iter()
+            .copied()
+            .filter(|(_, n)| n.has_tag_name("joint") || n.has_tag_name("freejoint"))
+            .collect();
+        let parent_name = out.links[parent].name.clone();
+        let mut joint = Joint {
+            name: format!("{link_name}_joint"),
+            kind: JointKind::Fixed,
+            parent: parent_name,
+            child: link_name.clone(),
+            origin,
+            axis: DVec3::Z,
+            limit: None,
+        };
+        if let Some(&(_, j)) = joints.first() {
+            self.joint(j, class, &link_name, &mut joint)?;
+        }
+        if joints.len() > 1 {
+            out.warnings.push(format!(
+                "{}: body {link_name:?} has {} joints: the URDF output keeps the first ({:?})",
+                self.name,
+                joints.len(),
+                joint.name
+            ));
+        }
+        out.joints.push(joint);
+        self.walk(el, index, DAffine3::IDENTITY, class, out)
+    }
+
+    /// A body's joint (`<joint>` or `<freejoint>`) into `joint`: its name, kind, axis and
+    /// range, with its class's defaults.
+    fn joint(&self, j: Node, class: &str, link: &str, joint: &mut Joint) -> Result<(), IoError> {
+        if let Some(n) = j.attribute("name") {
+            joint.name = n.to_owned();
+        }
+        if j.has_tag_name("freejoint") {
+            joint.kind = JointKind::Floating;
+            return Ok(());
+        }
+        let class = j.attribute("class").unwrap_or(class);
+        let d = &self.class(class, &format!("body {link:?}"))?.joint;
+        let attr = |a: &str| j.attribute(a).or(d.get(a).map(String::as_str));
+        let t = attr("type").unwrap_or("hinge");
+        joint.axis = vec3(attr("axis"), DVec3::Z, "joint axis", self.name)?;
+        let range = match attr("range") {
+            Some(r) => match numbers(r, "joint range", self.name)?[..] {
+                [lo, hi] if t == "hinge" => Some((self.angles.radians(lo), self.angles.radians(hi))),
+                [lo, hi] => Some((lo, hi)),
+                _ => return Err(self.bad(format!("joint range {r:?}: expected 2 numbers"))),
+            },
+            None => None,
+        };
+        let limited = match attr("limited") {
+            Some("true") => true,
+            Some("false") => false,
+            _ => self.autolimits && range.is_some(),
+        };
+        joint.limit = range.filter(|_| limited);
+        joint.kind = match t {
+            "hinge" if joint.limit.is_some() => JointKind::Revolute,
+            "hinge" => JointKind::Continuous,
+            "slide" => JointKind::Prismatic,
+            "ball" | "free" => JointKind::Floating,
+            other => {
+                return Err(self.bad(format!(
+                    "body {link:?}: joint type {other:?} is not one of hinge, slide, ball, free"
+                )))
+            }
+        };
+        Ok(())
+    }
+
+    /// One geom of link `link`, in the frame `frame`: a mesh to segment (and, when it
+    /// collides, a site the new geoms replace), a colliding primitive to keep, or nothing.
+    fn geom(
+        &self,
+        (f, g): El<'d, 't>,
+        link: usize,
+        frame: DAffine3,
+        class: &str,
+        out: &mut Out,
+    ) -> Result<(), IoError> {
+        if let Some(n) = g.attribute("name") {
+            out.names.insert(n.to_owned());
+        }
+        let link_name = out.links[link].name.clone();
+        let class = g.attribute("class").unwrap_or(class);
+        let d = &self.class(class, &format!("body {link_name:?}"))?.geom;
+        let attr = |a: &str| g.attribute(a).or(d.get(a).map(String::as_str));
+        let kind = attr("type").unwrap_or("sphere");
+        let flag = |a: &str| -> Result<i64, IoError> {
+            match attr(a) {
+                None => Ok(1),
+                Some(s) => s.trim().parse::<i64>().map_err(|_| {
+                    self.bad(format!("body {link_name:?}: geom {a} {s:?} is not an integer"))
+                }),
+            }
+        };
+        let collides = flag("contype")? != 0 || flag("conaffinity")? != 0;
+        let wanted = collides || self.source == MeshSource::Visual;
+        let is_mesh = kind == "mesh";
+        let fitted = PRIMITIVES.contains(&kind) && attr("mesh").is_some();
+        if !(is_mesh || fitted) {
+            if collides && PRIMITIVES.contains(&kind) {
+                let v = self.primitive(g, d, kind, frame, &link_name)?;
+                out.links[link].kept.push(v);
+            }
+            return Ok(());
+        }
+        if !wanted {
+            return Ok(());
+        }
+        let mesh = attr("mesh").ok_or_else(|| {
+            self.bad(format!("body {link_name:?}: a mesh geom names no mesh"))
+        })?;
+        let asset = self.assets.get(mesh).ok_or_else(|| {
+            self.bad(format!(
+                "body {link_name:?}: geom names the mesh {mesh:?}, which no <mesh> asset defines"
+            ))
+        })?;
+        // Geoms take their place from their class too (MuJoCo's element orientation wins
+        // over the class's, whichever attribute gives it).
+        let own = ORIENTATIONS.iter().any(|a| g.attribute(*a).is_some());
+        let placed = frame
+            * self.angles.frame(
+                |a| {
+                    if ORIENTATIONS.contains(&a) && own {
+                        g.attribute(a)
+                    } else {
+                        attr(a)
+                    }
+                },
+                self.name,
+            )?;
+        let mut segmented = false;
+        match &asset.file {
+            None => out.warnings.push(format!(
+                "{}: body {link_name:?}: mesh {mesh:?} is given by vertices in the file, which \
+                 bvseg does not read: its geom is left as it is",
+                self.name
+            )),
+            Some(file) => {
+                let file = if self.strippath {
+                    Path::new(file)
+                        .file_name()
+                        .map_or(file.clone(), |n| n.to_string_lossy().into_owned())
+                } else {
+                    file.clone()
+                };
+                let path = resolve_mesh(&self.meshdir, &file, self.name, &link_name)?;
+                if let Some(why) = model::unreadable(&path) {
+                    out.warnings.push(format!(
+                        "{}: body {link_name:?}: mesh {file:?}: {why}: its geom is left as it is",
+                        self.name
+                    ));
+                } else {
+                    out.links[link].meshes.push(MeshRef {
+                        path,
+                        given: file,
+                        reference: asset.reference,
+                        scale: asset.scale,
+                        origin: placed,
+                    });
+                    segmented = true;
+                }
+            }
+        }
+        // A primitive sized from a mesh is MuJoCo's own primitive: it stays, and only the
+        // outputs that do not have it (URDF, cuRobo) get its mesh's volumes.
+        if !is_mesh || !collides {
+            return Ok(());
+        }
+        let mut replace = self.source == MeshSource::Visual || segmented;
+        if replace {
+            if let Some(a) = ["mesh", "fromto"].into_iter().find(|a| d.contains_key(*a)) {
+                out.warnings.push(format!(
+                    "{}: body {link_name:?}: geom of mesh {mesh:?}: its default class {class:?} \
+                     sets {a}, which a primitive geom cannot have: the geom is left as it is",
+                    self.name
+                ));
+                replace = false;
+            }
+        }
+        let group = attr("group").and_then(|s| s.trim().parse::<i64>().ok()).unwrap_or(0);
+        let zero = |a: &str| attr(a).and_then(|s| s.trim().parse::<f64>().ok()) == Some(0.0);
+        let massless = zero("mass") || (attr("mass").is_none() && zero("density"));
+        let (lo, hi) = self.inertia_groups;
+        let carrier = out.from_geoms[link] && !massless && (lo..=hi).contains(&group);
+        out.sites.push(Site {
+            link,
+            file: f,
+            range: g.range(),
+            parent: frame,
+            attrs: g
+                .attributes()
+                .map(|a| (a.name().to_owned(), a.value().to_owned()))
+                .collect(),
+            collision_attrs: g
+                .attributes()
+                .filter(|a| matches!(a.name(), "contype" | "conaffinity"))
+                .map(|a| a.range())
+                .collect(),
+            replace,
+            carrier,
+        });
+        Ok(())
+    }
+
+    /// A colliding primitive geom as a volume in the link's frame.
+    fn primitive(
+        &self,
+        g: Node,
+        d: &BTreeMap<String, String>,
+        kind: &str,
+        frame: DAffine3,
+        link: &str,
+    ) -> Result<BoundingVolume, IoError> {
+        let attr = |a: &str| g.attribute(a).or(d.get(a).map(String::as_str));
+        let what = |m: &str| self.bad(format!("body {link:?}: {kind} geom: {m}"));
+        let mut size = [0.0; 3];
+        if let Some(s) = attr("size") {
+            for (i, x) in numbers(s, "geom size", self.name)?
+                .into_iter()
+                .take(3)
+                .enumerate()
+            {
+                size[i] = x;
+            }
+        }
+        // `fromto` (capsule, cylinder, box, ellipsoid) gives the Z axis and half-length.
+        let own = ORIENTATIONS.iter().any(|a| g.attribute(*a).is_some());
+        let (local, half) = match (attr("fromto"), kind) {
+            (Some(ft), "capsule" | "cylinder" | "box" | "ellipsoid") => {
+                let v = numbers(ft, "geom fromto", self.name)?;
+                let [a, b, c, x, y, z] = v[..] else {
+                    return Err(what(&format!("fromto {ft:?}: expected 6 numbers")));
+                };
+                let (from, to) = (DVec3::new(a, b, c), DVec3::new(x, y, z));
+                let axis = (to - from).normalize_or_zero();
+                if axis == DVec3::ZERO {
+                    return Err(what("fromto: its two ends coincide"));
+                }
+                (
+                    DAffine3::from_rotation_translation(z_to(axis), (from + to) * 0.5),
+                    Some((to - from).length() * 0.5),
+                )
+            }
+            _ => (
+                self.angles.frame(
+                    |a| {
+                        if ORIENTATIONS.contains(&a) && own {
+                            g.attribute(a)
+                        } else {
+                            attr(a)
+                        }
+                    },
+                    self.name,
+                )?,
+                None,
+            ),
+        };
+        let f = frame * local;
+        let center = f.translation;
+        let axes = DMat3::from_cols(
+            f.matrix3.x_axis.normalize(),
+            f.matrix3.y_axis.normalize(),
+            f.matrix3.z_axis.normalize(),
+        );
+        let (r, h) = (size[0], half.unwrap_or(size[1]));
+        let positive = |xs: &[f64]| xs.iter().all(|x| *x > 0.0 && x.is_finite());
+        let v = match kind {
+            "sphere" if positive(&[r]) => BoundingVolume::sphere(center, r),
+            "capsule" if positive(&[r, h]) => BoundingVolume::capsule(center, axes.z_axis, h, r),
+            "capsule" if positive(&[r]) => BoundingVolume::sphere(center, r),
+            "cylinder" if positive(&[r, h]) => BoundingVolume::cylinder(center, axes.z_axis, h, r),
+            "box" | "ellipsoid" => {
+                let e = DVec3::new(size[0], size[1], half.unwrap_or(size[2]));
+                if !positive(&e.to_array()) {
+                    return Err(what(&format!("size {e}: expected positive sizes")));
+                }
+                let shape = if kind == "box" {
+                    Shape::Obb
+                } else {
+                    Shape::Ellipsoid
+                };
+                BoundingVolume::frame(shape, center, axes, e)
+            }
+            _ => return Err(what(&format!("size {size:?}: expected positive sizes"))),
+        };
+        Ok(v)
+    }
+}
+
+/// Reads a `<default>` element (class `main` when it has no name) and its nested classes
+/// into `classes`, each over the attributes it inherits.
+fn defaults(
+    tree: &Tree,
+    el: El,
+    inherited: &Defaults,
+    classes: &mut BTreeMap<String, Defaults>,
+) {
+    let mut d = inherited.clone();
+    let kids = tree.kids(el);
+    for (tag, map) in [
+        ("geom", &mut d.geom),
+        ("mesh", &mut d.mesh),
+        ("joint", &mut d.joint),
+    ] {
+        for (_, g) in kids.iter().filter(|(_, n)| n.has_tag_name(tag)) {
+            for a in g.attributes() {
+                map.insert(a.name().to_owned(), a.value().to_owned());
+            }
+        }
+    }
+    for c in kids.iter().filter(|(_, n)| n.has_tag_name("default")) {
+        defaults(tree, *c, &d, classes);
+    }
+    let class = el.1.attribute("class").unwrap_or("main").to_owned();
+    classes.insert(class, d);
+}
+
+/// The files an MJCF file includes, directly or not (canonical paths), as far as they can
+/// be read.
+pub(crate) fn included_files(path: &Path, text: String) -> Vec<PathBuf> {
+    let name = path.display().to_string();
+    files::load(path, &name, text)
+        .map(|files| {
+            files
+                .iter()
+                .skip(1)
+                .map(|f| f.path.canonicalize().unwrap_or_else(|_| f.path.clone()))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// A directory as a canonical path when it can be (`""`, a bare file's directory, is `.`).
+fn canonical_dir(dir: &Path) -> PathBuf {
+    let d = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    d.canonicalize().unwrap_or_else(|_| dir.to_path_buf())
+}
