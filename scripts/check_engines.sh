@@ -6,10 +6,14 @@
 # - MJCF: MuJoCo's Python package loads it (MjModel.from_xml_path), steps it, and its geoms
 #   (type, size, position, axes; mesh vertices in world coordinates) must match the JSON.
 # The checks of both are in scripts/check_engines.py.
-# - Robots: `bvseg robot` on the bundled MJCF arm (assets/robots/arm) and, when the project's
-#   shared folder is there (../shared, or $BVSEG_SHARED), on the Panda URDF; MuJoCo loads the
-#   original and the new URDF and MJCF, and every original collision mesh vertex must lie in
-#   the new geoms of its body (scripts/check_robot.py).
+# - Robots: `bvseg robot` on the bundled MJCF arms (assets/robots/arm, assets/robots/arm6 as
+#   written and as MuJoCo saves it, scripts/mujoco_save.py) and, when the project's shared
+#   folder is there (../shared, or $BVSEG_SHARED), on the Panda URDF and on MuJoCo's save of
+#   it; MuJoCo loads the original and the new URDF and MJCF, every original collision mesh
+#   vertex must lie in the new geoms of its body (the world body's included), and a new MJCF
+#   must keep the original's bodies, joints, actuators, sensors, inertias and visual geoms
+#   (scripts/check_robot.py); with the shared folder, its judge bvrobot_mjcf.py checks each
+#   new MJCF of an MJCF too.
 #
 #   scripts/check_engines.sh BVSEG_BINARY [OUTDIR]
 #
@@ -136,7 +140,8 @@ robot() {
     fi
     for new in "$dir/$stem.xml" "$dir/$stem.urdf"; do
         if report=$("$py" "$root/scripts/check_robot.py" "$original" "$new" 2>&1); then
-            echo "OK robot $name $(basename "$new"): $(tail -n 1 <<<"$report")"
+            echo "OK robot $name $(basename "$new"): $(grep -v '^kept: ' <<<"$report" | tail -n 1)"
+            grep '^kept: ' <<<"$report" | sed 's/^/   /' || true
         else
             echo "FAIL robot $name $(basename "$new"):"
             sed 's/^/  /' <<<"$report"
@@ -144,11 +149,45 @@ robot() {
         fi
         checked=$((checked + 1))
     done
+    # The shared judge of MJCF robots, on a new MJCF of an MJCF.
+    if [ -n "$judge" ] && [ "${original##*.}" = xml ]; then
+        local verdict
+        if verdict=$("$py" "$judge" "$original" "$dir/$stem.xml" --json 2>&1) &&
+            "$py" -c 'import json, sys; r = json.loads(sys.argv[1].splitlines()[-1]); sys.exit(not (r["min_enclosed"] >= 1.0 and r["mesh_geoms_left"] == 0))' "$verdict"; then
+            echo "OK robot $name $stem.xml by bvrobot_mjcf.py: $(tail -n 1 <<<"$verdict" | cut -c1-120)"
+        else
+            echo "FAIL robot $name $stem.xml by bvrobot_mjcf.py: $(tail -n 3 <<<"$verdict")"
+            failed=1
+        fi
+        checked=$((checked + 1))
+    fi
 }
-robot arm "$root/assets/robots/arm/arm.xml" bvseg_arm --max-parts 6 --samples 4000
 shared="${BVSEG_SHARED:-$root/../shared}"
+judge=""
+if [ -f "$shared/tools/bvrobot_mjcf.py" ]; then
+    judge="$shared/tools/bvrobot_mjcf.py"
+fi
+robot arm "$root/assets/robots/arm/arm.xml" bvseg_arm --max-parts 6 --samples 4000
+robot arm6 "$root/assets/robots/arm6/arm6.xml" arm6 --samples 4000
+# MuJoCo's own save of arm6: what a robot saved by MuJoCo looks like.
+mkdir -p "$out/saved"
+if "$py" "$root/scripts/mujoco_save.py" "$root/assets/robots/arm6/arm6.xml" "$out/saved/arm6.xml" \
+    >"$out/saved/arm6.log" 2>&1; then
+    robot arm6_saved "$out/saved/arm6.xml" arm6 --samples 4000
+else
+    echo "FAIL robot arm6_saved: scripts/mujoco_save.py: $(tail -n 3 "$out/saved/arm6.log")"
+    failed=1
+fi
 if [ -f "$shared/robots/panda/panda.urdf" ]; then
     robot panda "$shared/robots/panda/panda.urdf" panda
+    # MuJoCo's save of the Panda URDF: its base fused into the world body, its hand in frames.
+    if "$py" "$root/scripts/mujoco_save.py" "$shared/robots/panda/panda.urdf" "$out/saved/panda.xml" \
+        >"$out/saved/panda.log" 2>&1; then
+        robot panda_saved "$out/saved/panda.xml" panda
+    else
+        echo "FAIL robot panda_saved: scripts/mujoco_save.py: $(tail -n 3 "$out/saved/panda.log")"
+        failed=1
+    fi
 else
     echo "skipped robot panda: no $shared/robots/panda/panda.urdf (the project's shared folder)"
 fi

@@ -22,6 +22,13 @@ Also: each body of NEW sits where the body of ORIGINAL with its name does, both 
 reference pose (qpos0), within 1e-6 (length units and radians); a URDF, which has no place for
 its root link's pose in the world, is compared relative to its root. And NEW steps.
 
+When both are MJCF, NEW must keep what ORIGINAL has besides its collision meshes: the names, in
+order, of its bodies, joints, actuators, sensors, sites, equality constraints and keyframes; each
+body's mass, inertia and inertial frame (relative 1e-9); and each body's visual geoms (those that
+do not collide): type, mesh, size, place, group, colour and material. A colliding mesh geom of
+ORIGINAL may stay in NEW as a visual geom of the same body and place (bvseg keeps one so when its
+body's mass comes from its geoms); any other new visual geom is a failure.
+
 Prints one line per body (vertices, enclosed fraction, geoms by type) and `worst_enclosed`,
 `new_mesh_collisions` (NEW's colliding mesh geoms that are not convex); exits 1 when a body
 encloses less than 1.0, a collision mesh is left in NEW, a body is misplaced or NEW does not
@@ -169,8 +176,6 @@ def original_vertices(m, source):
         if source == "collision" and not collides(m, g):
             continue
         b = m.geom_bodyid[g]
-        if b == 0:
-            continue  # the world's own geoms are not a link's
         v = mesh_vertices(m, m.geom_dataid[g])
         p = v @ quat_matrix(m.geom_quat[g]).T + m.geom_pos[g]
         out.setdefault(body_name(m, b), []).append(p)
@@ -184,7 +189,7 @@ def new_geoms(m):
     for g in range(m.ngeom):
         if not collides(m, g):
             continue
-        kind = TYPES.get(int(m.geom_type[g]))
+        kind = TYPES.get(int(m.geom_type[g]), f"type {int(m.geom_type[g])}")
         planes = None
         if kind == "mesh":
             planes = hull_planes(m, m.geom_dataid[g])
@@ -218,6 +223,83 @@ def poses(m, relative):
             pos, quat = p, q
         out[body_name(m, b)] = (pos, quat)
     return out
+
+
+NAMED = {
+    "bodies": ("nbody", mujoco.mjtObj.mjOBJ_BODY),
+    "joints": ("njnt", mujoco.mjtObj.mjOBJ_JOINT),
+    "actuators": ("nu", mujoco.mjtObj.mjOBJ_ACTUATOR),
+    "sensors": ("nsensor", mujoco.mjtObj.mjOBJ_SENSOR),
+    "sites": ("nsite", mujoco.mjtObj.mjOBJ_SITE),
+    "equalities": ("neq", mujoco.mjtObj.mjOBJ_EQUALITY),
+    "keyframes": ("nkey", mujoco.mjtObj.mjOBJ_KEY),
+}
+
+
+def names(m, what):
+    count, obj = NAMED[what]
+    return [mujoco.mj_id2name(m, obj, i) for i in range(getattr(m, count))]
+
+
+def visual_geoms(m):
+    """The geoms that do not collide, each as a comparable tuple (body, type, mesh, size,
+    pos, quat, group, rgba, material), rounded to 1e-9."""
+    out = []
+    for g in range(m.ngeom):
+        if collides(m, g):
+            continue
+        mesh = (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MESH, m.geom_dataid[g])
+                if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH else None)
+        out.append((body_name(m, m.geom_bodyid[g]), int(m.geom_type[g]), mesh,
+                    *[tuple(np.round(np.asarray(a, dtype=np.float64), 9)) for a in
+                      (m.geom_size[g], m.geom_pos[g], m.geom_quat[g], m.geom_rgba[g])],
+                    int(m.geom_group[g]), int(m.geom_matid[g])))
+    return out
+
+
+def collision_meshes(m):
+    """The colliding mesh geoms, as visual_geoms writes them (what may stay as a visual)."""
+    out = []
+    for g in range(m.ngeom):
+        if collides(m, g) and m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH:
+            mesh = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MESH, m.geom_dataid[g])
+            out.append((body_name(m, m.geom_bodyid[g]), mesh,
+                        tuple(np.round(np.asarray(m.geom_pos[g], dtype=np.float64), 9)),
+                        tuple(np.round(np.asarray(m.geom_quat[g], dtype=np.float64), 9))))
+    return out
+
+
+def kept(mo, mn):
+    """What NEW (an MJCF) must keep of ORIGINAL (an MJCF): a list of failures, and counts."""
+    fails, counts = [], {}
+    for what in NAMED:
+        a, b = names(mo, what), names(mn, what)
+        counts[what] = len(a)
+        if a != b:
+            fails.append(f"{what} differ: {a} != {b}")
+    if mo.nbody == mn.nbody:
+        for field in ("body_mass", "body_inertia", "body_ipos", "body_iquat"):
+            a, b = getattr(mo, field), getattr(mn, field)
+            scale = max(float(np.abs(a).max()), 1e-300)
+            if not np.allclose(a, b, rtol=1e-9, atol=1e-9 * scale):
+                worst = int(np.argmax(np.abs(np.asarray(a) - np.asarray(b)).reshape(mo.nbody, -1).max(axis=1)))
+                fails.append(f"{field} differs (body {body_name(mo, worst)}: {a[worst]} != {b[worst]})")
+    vo, vn = visual_geoms(mo), visual_geoms(mn)
+    missing = [g for g in vo if g not in vn]
+    extra = list(vn)
+    for g in vo:
+        if g in extra:
+            extra.remove(g)
+    allowed = collision_meshes(mo)
+    carriers = [g for g in extra if (g[0], g[2], g[4], g[5]) in allowed]
+    others = [g for g in extra if g not in carriers]
+    if missing:
+        fails.append(f"{len(missing)} visual geoms missing, e.g. body {missing[0][0]} mesh {missing[0][2]}")
+    if others:
+        fails.append(f"{len(others)} new visual geoms, e.g. body {others[0][0]} mesh {others[0][2]}")
+    counts["visual_geoms"] = len(vo)
+    counts["collision_meshes_kept_for_mass"] = len(carriers)
+    return fails, counts
 
 
 def body_offsets(mo, mn, relative):
@@ -262,9 +344,13 @@ def check(original, new, source):
         frac = float(ok.mean()) if len(p) else 1.0
         worst = min(worst, frac)
         links[name] = {"vertices": int(len(p)), "enclosed": frac, "geoms": counts}
+    both_mjcf = not original.lower().endswith(".urdf") and not new.lower().endswith(".urdf")
+    kept_fails, kept_counts = kept(mo, mn) if both_mjcf else ([], {})
     return {
         "original": original,
         "new": new,
+        "kept_failures": kept_fails,
+        "kept": kept_counts,
         "source": source,
         "links": links,
         "worst_enclosed": worst,
@@ -297,8 +383,13 @@ def main():
         print(f"worst_enclosed {r['worst_enclosed']}, new_mesh_collisions {r['new_mesh_collisions']}, "
               f"new geoms {r['new_geoms']}, steps {'ok' if r['steps'] else 'NOT finite'}, "
               f"bodies placed within {r['body_offset']:.2g} and {r['body_angle']:.2g} rad")
+        if r["kept"]:
+            k = r["kept"]
+            print("kept: " + ", ".join(f"{n} {w}" for w, n in k.items())
+                  + ("" if not r["kept_failures"] else "; FAILED: " + "; ".join(r["kept_failures"])))
     placed = r["body_offset"] <= PLACE_TOL and r["body_angle"] <= PLACE_TOL
-    ok = r["links"] and r["worst_enclosed"] >= 1.0 and r["new_mesh_collisions"] == 0 and r["steps"] and placed
+    ok = (r["links"] and r["worst_enclosed"] >= 1.0 and r["new_mesh_collisions"] == 0 and r["steps"]
+          and placed and not r["kept_failures"])
     sys.exit(0 if ok else 1)
 
 

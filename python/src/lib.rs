@@ -29,6 +29,10 @@ fn _bvseg(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "DEFAULT_SPHERES_PER_LINK",
         bvseg_io::robot::DEFAULT_SPHERES_PER_LINK,
     )?;
+    m.add(
+        "DEFAULT_PARTS_PER_LINK",
+        bvseg_io::robot::DEFAULT_PARTS_PER_LINK,
+    )?;
     m.add("GENERATOR", bvseg_io::GENERATOR)?;
     m.add("MESH_EXTENSIONS", bvseg_io::MESH_EXTENSIONS.to_vec())?;
     m.add("MAX_VOLUMES_BYTES", bvseg_io::MAX_VOLUMES_BYTES)?;

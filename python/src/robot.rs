@@ -9,15 +9,15 @@ use std::time::{Duration, Instant};
 
 use bvseg_core::{Cancel, Step};
 use bvseg_io::robot::{
-    segment_robot, MeshSource, RobotError, RobotEvent, RobotOptions, RobotRun,
-    DEFAULT_SPHERES_PER_LINK,
+    segment_robot, MeshSource, PartBudget, RobotError, RobotEvent, RobotOptions, RobotRun,
+    DEFAULT_PARTS_PER_LINK, DEFAULT_SPHERES_PER_LINK,
 };
 use pyo3::exceptions::{PyTimeoutError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::args::{size, Given};
-use crate::errors::{self, MeshError};
+use crate::errors;
 use crate::run::{pool, step_dict, within, Timer};
 
 /// What the run tells this thread.
@@ -39,7 +39,6 @@ fn robot_error(e: RobotError, timed_out: bool, timeout: Option<f64>, path: &str)
         RobotError::Io(e) => errors::robot_io(e),
         RobotError::Options(m) => PyValueError::new_err(m),
         RobotError::Params(p) => PyValueError::new_err(p.to_string()),
-        RobotError::NoVolume { .. } => MeshError::new_err(e.to_string()),
         RobotError::Segment { file, link, source } => {
             errors::core(&format!("{file}: link {link:?}"), source)
         }
@@ -55,23 +54,20 @@ fn link_dict<'py>(
     out_dir: &std::path::Path,
 ) -> PyResult<Bound<'py, PyDict>> {
     let link = &run.robot.links[i];
+    let result = run.links[i].as_ref();
     let d = PyDict::new(py);
     d.set_item("name", &link.name)?;
-    let parts = run.parts[i].as_ref();
-    d.set_item("parts", parts.map_or(0, |s| s.parts.len()))?;
-    let shapes: Vec<&str> = parts
+    d.set_item("parts", result.map_or(0, |r| r.parts.parts.len()))?;
+    let shapes: Vec<&str> = result
         .into_iter()
-        .flat_map(|s| s.parts.iter().map(|p| p.volume.shape.as_str()))
+        .flat_map(|r| r.parts.parts.iter().map(|p| p.volume.shape.as_str()))
         .collect();
     d.set_item("shapes", shapes)?;
     d.set_item("kept", link.kept.len())?;
-    d.set_item(
-        "spheres",
-        run.spheres[i].as_ref().map_or(0, |s| s.parts.len()),
-    )?;
+    d.set_item("spheres", result.map_or(0, |r| r.spheres.parts.len()))?;
     d.set_item("meshes", link.meshes.len())?;
-    d.set_item("triangles", run.triangles[i])?;
-    d.set_item("tolerances_met", run.tolerances_met[i])?;
+    d.set_item("triangles", result.map_or(0, |r| r.triangles))?;
+    d.set_item("tolerances_met", result.and_then(|r| r.tolerances_met))?;
     let json = run
         .volumes_file(i)
         .map(|rel| out_dir.join(rel).display().to_string());
@@ -116,11 +112,24 @@ pub fn robot<'py>(
     };
     let opt =
         |name: &str, v: &Option<Bound<'py, PyAny>>| v.as_ref().map(|v| size(name, v)).transpose();
+    let parts = match (
+        opt("max_parts", &max_parts)?,
+        opt("total_parts", &total_parts)?,
+    ) {
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "max_parts and total_parts cannot be combined: give a budget per link or for \
+                 the robot",
+            ))
+        }
+        (_, Some(n)) => PartBudget::Total(n),
+        (Some(n), None) => PartBudget::PerLink(n),
+        (None, None) => PartBudget::PerLink(DEFAULT_PARTS_PER_LINK),
+    };
     let options = RobotOptions {
         source,
         params: run.params.clone(),
-        max_parts: opt("max_parts", &max_parts)?,
-        total_parts: opt("total_parts", &total_parts)?,
+        parts,
         spheres_per_link: opt("spheres_per_link", &spheres_per_link)?
             .unwrap_or(DEFAULT_SPHERES_PER_LINK),
         urdf_capsules,
@@ -219,13 +228,15 @@ pub fn robot<'py>(
     };
     d.set_item("urdf", file("urdf"))?;
     d.set_item("mjcf", file("xml"))?;
+    d.set_item("curobo", out_dir.join("curobo.yml").display().to_string())?;
     d.set_item(
-        "curobo",
+        "manifest",
         out_dir
             .join(bvseg_io::robot::DONE_FILE)
             .display()
             .to_string(),
     )?;
+    d.set_item("warnings", &done.warnings)?;
     let links = (0..done.robot.links.len())
         .map(|i| link_dict(py, &done, i, &out_dir))
         .collect::<PyResult<Vec<_>>>()?;

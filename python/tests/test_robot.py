@@ -32,8 +32,9 @@ def test_the_same_files_as_the_cli(tmp_path, run_cli, arm):
     cli = sorted(str(p.relative_to(tmp_path / "cli")) for p in (tmp_path / "cli").rglob("*") if p.is_file())
     py = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     assert cli == py == [
-        "bvseg_arm.urdf", "bvseg_arm.xml", "curobo.yml",
+        "arm_bodies.xml", "bvseg_arm.urdf", "bvseg_arm.xml", "curobo.yml",
         "links/base.json", "links/finger.json", "links/lower.json", "links/upper.json",
+        "manifest.json",
     ]
     for rel in py:
         assert (out / rel).read_bytes() == (tmp_path / "cli" / rel).read_bytes(), rel
@@ -41,10 +42,13 @@ def test_the_same_files_as_the_cli(tmp_path, run_cli, arm):
 
 def test_what_it_returns(arm):
     assert arm.name == "bvseg_arm" and arm.robot == "bvseg_arm" and arm.format == "mjcf"
-    assert Path(arm.files[-1]).name == "curobo.yml" == Path(arm.curobo).name
-    assert Path(arm.urdf).is_file() and Path(arm.mjcf).is_file()
-    assert [link["name"] for link in arm.links] == ["base", "upper", "lower", "finger"]
-    for link in arm.links:
+    assert Path(arm.files[-1]).name == "manifest.json" == Path(arm.manifest).name
+    assert Path(arm.urdf).is_file() and Path(arm.mjcf).is_file() and Path(arm.curobo).is_file()
+    assert arm.warnings == []
+    # The MJCF's world body is a link, without meshes here.
+    assert [link["name"] for link in arm.links] == ["world", "base", "upper", "lower", "finger"]
+    assert arm.link("world")["volumes"] is None and arm.link("world")["parts"] == 0
+    for link in arm.links[1:]:
         assert 1 <= link["parts"] <= 3 and link["parts"] == len(link["shapes"])
         assert link["meshes"] == 1 and link["triangles"] > 0 and link["spheres"] >= 1
         # The URDF's kinds only.
@@ -55,8 +59,14 @@ def test_what_it_returns(arm):
     # The arm's own capsule and box pad are kept.
     assert arm.link("upper")["kept"] == 1 and arm.link("finger")["kept"] == 1
     assert arm.parts == sum(link["parts"] for link in arm.links)
-    mjcf = Path(arm.mjcf).read_text()
-    assert 'type="mesh"' not in mjcf and mjcf.count('type="capsule"') == 1
+    # The MJCF as written, its body tree in the included file with new geoms in place of the
+    # collision meshes, the capsule as it was.
+    assert '<include file="arm_bodies.xml"/>' in Path(arm.mjcf).read_text()
+    bodies = (Path(arm.out_dir) / "arm_bodies.xml").read_text()
+    assert '<geom type="capsule" fromto="0 0 0 0 0 0.2" size="0.02"/>' in bodies
+    assert all(f'name="{link}_bvseg_0"' in bodies for link in ("base", "upper", "lower", "finger"))
+    manifest = json.loads(Path(arm.manifest).read_text())
+    assert manifest["files"][-1] == "curobo.yml" and manifest["parts"] == arm.parts
     with pytest.raises(KeyError):
         arm.link("nope")
     assert "4 links segmented" in repr(arm)
@@ -68,8 +78,8 @@ def test_budgets(tmp_path):
     assert all(1 <= link["spheres"] <= 2 for link in r.links)
     # MJCF's visual source: every mesh geom, the visual twins of base and upper too.
     r = bvseg.robot(ARM, tmp_path / "v", source="visual", k=1, samples=2000)
-    assert [link["meshes"] for link in r.links] == [2, 2, 1, 1]
-    assert [link["parts"] for link in r.links] == [1, 1, 1, 1]
+    assert [link["meshes"] for link in r.links] == [0, 2, 2, 1, 1]
+    assert [link["parts"] for link in r.links] == [0, 1, 1, 1, 1]
 
 
 TWO = """<?xml version="1.0"?>
@@ -96,7 +106,6 @@ def write_two(d: Path, mesh="bunny.obj", second="arm", child="arm") -> Path:
         (dict(mesh="nothere.obj"), FileNotFoundError, ["two.urdf", '"base"', "nothere.obj"]),
         (dict(second="base", child="base"), bvseg.RobotError, ['"base" is used twice']),
         (dict(child="hand"), bvseg.RobotError, ['joint "j"', '"hand" is not a link']),
-        (dict(mesh="bad.dae"), bvseg.MeshError, ['link "base"', "bad.dae", "unsupported mesh format"]),
     ],
 )
 def test_bad_robots(tmp_path, case, kind, needles):
@@ -107,6 +116,14 @@ def test_bad_robots(tmp_path, case, kind, needles):
         assert n in str(e.value)
     assert "\n" not in str(e.value)
     assert not (tmp_path / "out").exists()
+
+
+def test_meshes_it_cannot_read_stay_with_a_warning(tmp_path):
+    p = write_two(tmp_path / "in", mesh="bad.dae")
+    with pytest.warns(bvseg.BvsegWarning, match=r'link "base": mesh "bad.dae": unsupported mesh format'):
+        r = bvseg.robot(p, tmp_path / "out", samples=2000)
+    assert len(r.warnings) == 1 and r.link("base")["parts"] == 0
+    assert '<mesh filename="bad.dae"/>' in Path(r.urdf).read_text()
 
 
 def test_bad_mjcf(tmp_path):

@@ -1,6 +1,9 @@
 //! `bvseg robot` on a two-link robot written by the test: every link's collision vertices lie
 //! in its new volumes, the URDF keeps no mesh collision, and bad robots are one-line errors
-//! with nothing written; the bundled MJCF arm; robots in `bvseg batch`.
+//! with nothing written; meshes it cannot replace are kept with a warning; MJCF robots given
+//! back as written but for their colliding mesh geoms (the bundled arms, and one written
+//! here); robots in `bvseg batch`. That the new MJCF geoms sit where MuJoCo places the meshes
+//! is checked with MuJoCo by scripts/check_robot.py (CI's engine check).
 // Tests state their expectations by panicking.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::fs;
@@ -172,22 +175,16 @@ fn bad_robots_are_one_line_errors_and_write_nothing() {
             vec!["two.urdf", "\"j\"", "\"hand\"", "not a link"],
         ),
         (
-            "unreadable mesh format",
-            "two.urdf",
-            urdf("meshes/base.dae", "arm", "arm"),
-            vec!["\"base\"", "base.dae", "unsupported mesh format '.dae'"],
-        ),
-        (
             "mesh that does not parse",
             "two.urdf",
             urdf("meshes/broken.obj", "arm", "arm"),
             vec!["\"base\"", "broken.obj"],
         ),
         (
-            "mesh without volume",
-            "two.urdf",
-            urdf("meshes/flat.obj", "arm", "arm"),
-            vec!["two.urdf", "link \"base\"", "enclose no volume"],
+            "missing MJCF mesh",
+            "one.xml",
+            mjcf("meshes/nothere.stl", ""),
+            vec!["one.xml", "\"b\"", "meshes/nothere.stl", "not found"],
         ),
         (
             "include cycle",
@@ -268,11 +265,36 @@ fn the_bundled_mjcf_arm() {
         files(&dir.join("out/links")),
         ["base.json", "finger.json", "lower.json", "upper.json"]
     );
+    assert_eq!(
+        files(&dir.join("out")),
+        [
+            "arm_bodies.xml",
+            "bvseg_arm.urdf",
+            "bvseg_arm.xml",
+            "curobo.yml",
+            "links",
+            "manifest.json"
+        ]
+    );
+    // The body tree is in the included file: its collision meshes are replaced there, and its
+    // visual meshes, capsule and pad are as they were.
+    let bodies = fs::read_to_string(dir.join("out/arm_bodies.xml")).unwrap();
+    let original = fs::read_to_string(arm.parent().unwrap().join("arm_bodies.xml")).unwrap();
+    for line in original
+        .lines()
+        .filter(|l| !l.contains("class=\"collision\""))
+    {
+        assert!(bodies.contains(line), "{line:?} is not kept");
+    }
+    for body in ["base", "upper", "lower", "finger"] {
+        assert!(
+            bodies.contains(&format!("name=\"{body}_bvseg_0\"")),
+            "{body}"
+        );
+    }
     let xml = fs::read_to_string(dir.join("out/bvseg_arm.xml")).unwrap();
-    assert!(!xml.contains("type=\"mesh\""), "a mesh geom is left");
-    assert_eq!(xml.matches("upper_kept_").count(), 1, "the capsule");
-    assert_eq!(xml.matches("finger_kept_").count(), 1, "the pad");
-    assert!(xml.contains("type=\"capsule\""));
+    assert!(xml.contains("<include file=\"arm_bodies.xml\"/>"));
+    assert!(xml.contains("<!-- bvseg "), "marked as bvseg's");
     // --max-parts 3 bounds every link.
     for link in ["base", "upper", "lower", "finger"] {
         let doc = bvseg_io::read_volumes(dir.join(format!("out/links/{link}.json"))).unwrap();
@@ -280,7 +302,248 @@ fn the_bundled_mjcf_arm() {
     }
     let urdf = fs::read_to_string(dir.join("out/bvseg_arm.urdf")).unwrap();
     assert!(!urdf.contains("<mesh"));
-    assert_eq!(urdf.matches("<joint ").count(), 3);
+    assert_eq!(urdf.matches("upper_kept_").count(), 1, "the capsule");
+    assert_eq!(urdf.matches("finger_kept_").count(), 1, "the pad");
+    // The world and four bodies: the base's joint to the world, and the three joints.
+    assert_eq!(urdf.matches("<joint ").count(), 4);
+    assert!(urdf.contains("<joint name=\"shoulder\" type=\"revolute\">"));
+    assert!(urdf.contains("<joint name=\"slide\" type=\"prismatic\">"));
+}
+
+/// An MJCF written as MuJoCo saves robots: the base's collision mesh in the world body, a
+/// `<frame>` around a body's mesh, visual twins, an actuator; with an include and a relative
+/// mesh directory.
+const SAVED: &str = r#"<mujoco model="saved">
+  <compiler angle="radian" meshdir="meshes"/>
+  <!-- kept -->
+  <asset>
+    <mesh name="base" file="base.obj"/>
+    <mesh name="arm" file="arm.obj" scale="1 1 2"/>
+  </asset>
+  <worldbody>
+    <geom type="mesh" contype="0" conaffinity="0" group="1" density="0" mesh="base"/>
+    <geom type="mesh" rgba="1 1 1 1" mesh="base"/>
+    <body name="link1" pos="0 0 1">
+      <inertial pos="0 0 0.5" mass="1" diaginertia="0.1 0.1 0.1"/>
+      <joint name="joint1" range="-1 1"/>
+      <frame pos="0 0 0.5" quat="0.7071067811865476 0 0 0.7071067811865476">
+        <geom type="mesh" contype="0" conaffinity="0" group="1" density="0" mesh="arm"/>
+        <geom name="arm_collision" type="mesh" friction="0.5" mesh="arm"/>
+      </frame>
+      <include file="hand.xml"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="act1" joint="joint1" kp="10"/>
+  </actuator>
+</mujoco>
+"#;
+
+const HAND: &str = r#"<mujoco>
+  <body name="hand" pos="0 0 1">
+    <joint name="joint2" type="slide" axis="1 0 0" range="0 0.1"/>
+    <geom type="mesh" mesh="arm" pos="0.5 0 0"/>
+  </body>
+</mujoco>
+"#;
+
+#[test]
+fn an_mjcf_robot_comes_back_as_written_with_primitive_colliders() {
+    let dir = scratch("robot_mjcf_kept");
+    let (base, arm) = setup(&dir);
+    fs::write(dir.join("saved.xml"), SAVED).unwrap();
+    fs::write(dir.join("hand.xml"), HAND).unwrap();
+    let out = run(
+        BIN,
+        &dir,
+        &["robot", "saved.xml", "-o", "out/robot", "--samples", "3000"],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    assert_eq!(
+        files(&dir.join("out/robot")),
+        [
+            "curobo.yml",
+            "hand.xml",
+            "links",
+            "manifest.json",
+            "saved.urdf",
+            "saved.xml"
+        ]
+    );
+    // The world's and each body's collision meshes are segmented in its frame: the world's
+    // base as it is, the arm scaled by 2 in z and placed by its frame (a quarter turn about
+    // z, 0.5 up), the hand's arm moved by 0.5 in x.
+    // setup() gives the arm as the URDF places it (z scaled by 2, then 0.5 up): undo it.
+    let arm: Vec<DVec3> = arm
+        .iter()
+        .map(|p| DVec3::new(p.x, p.y, (p.z - 0.5) / 2.0))
+        .collect();
+    let quarter = |p: DVec3| DVec3::new(-p.y, p.x, 2.0 * p.z + 0.5);
+    for (link, vertices) in [
+        ("world", base.clone()),
+        ("link1", arm.iter().map(|&p| quarter(p)).collect()),
+        (
+            "hand",
+            arm.iter()
+                .map(|&p| DVec3::new(p.x + 0.5, p.y, 2.0 * p.z))
+                .collect(),
+        ),
+    ] {
+        let doc = bvseg_io::read_volumes(dir.join(format!("out/robot/links/{link}.json"))).unwrap();
+        for p in vertices {
+            assert!(
+                doc.volumes.iter().any(|v| v.contains(p)),
+                "{link}: {p} is outside its volumes"
+            );
+        }
+    }
+    let xml = fs::read_to_string(dir.join("out/robot/saved.xml")).unwrap();
+    // Every line but the colliding mesh geoms' is kept, in order; the mesh directory leads
+    // back to the input's.
+    let kept: Vec<String> = SAVED
+        .lines()
+        .filter(|l| !l.contains("type=\"mesh\"") || l.contains("contype=\"0\""))
+        .map(|l| l.replace("meshdir=\"meshes\"", "meshdir=\"../../meshes\""))
+        .collect();
+    let mut at = 0;
+    for line in &kept {
+        let found = xml[at..]
+            .find(line)
+            .unwrap_or_else(|| panic!("{line:?} not kept in order:\n{xml}"));
+        at += found + line.len();
+    }
+    // The new geoms: where the meshes were, in the frame the mesh was written in, with its
+    // other attributes; no colliding mesh geom left.
+    assert!(xml.contains("<geom name=\"world_bvseg_0\" type="), "{xml}");
+    assert!(
+        xml.contains("<geom name=\"arm_collision_bvseg_0\" type="),
+        "{xml}"
+    );
+    assert!(xml.contains("friction=\"0.5\"/>"), "{xml}");
+    let frame = &xml[xml.find("<frame").unwrap()..xml.find("</frame>").unwrap()];
+    assert!(frame.contains("arm_collision_bvseg_0"), "{frame}");
+    let hand = fs::read_to_string(dir.join("out/robot/hand.xml")).unwrap();
+    assert!(hand.contains("<geom name=\"hand_bvseg_0\" type="), "{hand}");
+    assert!(hand.contains("<joint name=\"joint2\" type=\"slide\" axis=\"1 0 0\" range=\"0 0.1\"/>"));
+    for text in [&xml, &hand] {
+        assert!(!text
+            .lines()
+            .any(|l| l.contains("type=\"mesh\"") && !l.contains("contype=\"0\"")));
+    }
+    // The hand has no <inertial>: MuJoCo weighs it by its geoms, so its mesh stays for its
+    // mass, no longer colliding, and the new geoms weigh nothing.
+    assert!(
+        hand.contains("contype=\"0\" conaffinity=\"0\" type=\"mesh\" mesh=\"arm\""),
+        "{hand}"
+    );
+    assert!(hand.contains("mass=\"0\""), "{hand}");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("out/robot/manifest.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        manifest["files"].as_array().unwrap().last().unwrap(),
+        "curobo.yml"
+    );
+    assert_eq!(manifest["links"][0]["name"], "world");
+    // The URDF has the world as a link, and the first body's joint.
+    let urdf = fs::read_to_string(dir.join("out/robot/saved.urdf")).unwrap();
+    assert!(
+        urdf.contains("<joint name=\"joint1\" type=\"revolute\">"),
+        "{urdf}"
+    );
+    assert!(urdf.contains("<parent link=\"world\"/>"), "{urdf}");
+}
+
+#[test]
+fn meshes_that_cannot_be_replaced_stay_with_a_warning() {
+    // (file name, text, what the warning names, what the output keeps)
+    let cases: Vec<(&str, String, Vec<&str>, &str)> = vec![
+        (
+            "two.urdf",
+            urdf("meshes/base.dae", "arm", "arm"),
+            vec!["\"base\"", "base.dae", "unsupported mesh format '.dae'"],
+            r#"<collision><geometry><mesh filename="meshes/base.dae"/></geometry></collision>"#,
+        ),
+        (
+            "two.urdf",
+            urdf("meshes/flat.obj", "arm", "arm"),
+            vec!["two.urdf", "link \"base\"", "enclose no volume"],
+            r#"<collision><geometry><mesh filename="meshes/flat.obj"/></geometry></collision>"#,
+        ),
+        (
+            "one.xml",
+            mjcf("meshes/base.obj", "").replace(
+                r#"<mesh name="m" file="meshes/base.obj"/>"#,
+                r#"<mesh name="m" vertex="0 0 0 1 0 0 0 1 0 0 0 1"/>"#,
+            ),
+            vec!["one.xml", "\"b\"", "given by vertices"],
+            r#"<geom type="mesh" mesh="m"/>"#,
+        ),
+    ];
+    for (name, text, needles, kept) in cases {
+        let dir = scratch("robot_kept_with_warning");
+        setup(&dir);
+        fs::write(dir.join("meshes/base.dae"), "<COLLADA/>").unwrap();
+        fs::write(
+            dir.join("meshes/flat.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n",
+        )
+        .unwrap();
+        fs::write(dir.join(name), text).unwrap();
+        let out = run(
+            BIN,
+            &dir,
+            &["robot", name, "-o", "out", "--samples", "3000", "-q"],
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name}: {err}");
+        let warning = err
+            .lines()
+            .find(|l| l.starts_with("bvseg: warning: "))
+            .unwrap_or_else(|| panic!("{name}: no warning: {err}"));
+        for n in needles {
+            assert!(warning.contains(n), "{n:?} not in {warning}");
+        }
+        let written = fs::read_dir(dir.join("out"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                p.extension().is_some_and(|e| e == "urdf" || e == "xml")
+                    && p.extension() == Path::new(name).extension()
+            })
+            .unwrap();
+        let written = fs::read_to_string(written).unwrap();
+        assert!(
+            written.contains(kept),
+            "{name}: {kept} not kept:\n{written}"
+        );
+        let manifest: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(dir.join("out/manifest.json")).unwrap())
+                .unwrap();
+        assert_eq!(manifest["warnings"][0], warning["bvseg: warning: ".len()..]);
+    }
+}
+
+#[test]
+fn outputs_never_replace_the_robots_own_files() {
+    let dir = scratch("robot_overwrite");
+    setup(&dir);
+    fs::write(dir.join("one.xml"), mjcf("meshes/base.obj", "")).unwrap();
+    let out = run(
+        BIN,
+        &dir,
+        &["robot", "one.xml", "-o", ".", "--samples", "2000"],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("one of the robot's own files"), "{err}");
+    assert_eq!(
+        fs::read_to_string(dir.join("one.xml")).unwrap(),
+        mjcf("meshes/base.obj", "")
+    );
+    assert!(!dir.join("manifest.json").exists());
 }
 
 #[test]
@@ -342,13 +605,25 @@ fn batch_runs_robots_one_directory_each() {
     assert_eq!(rows[3][3], "4");
     assert_eq!(
         files(&dir.join("out/two")),
-        ["curobo.yml", "links", "two.urdf", "two.xml"]
+        [
+            "curobo.yml",
+            "links",
+            "manifest.json",
+            "two.urdf",
+            "two.xml"
+        ]
     );
     assert_eq!(
         files(&dir.join("out/one")),
-        ["curobo.yml", "links", "one.urdf", "one.xml"]
+        [
+            "curobo.yml",
+            "links",
+            "manifest.json",
+            "one.urdf",
+            "one.xml"
+        ]
     );
-    assert!(!dir.join("out/bad").join("curobo.yml").exists());
+    assert!(!dir.join("out/bad").join("manifest.json").exists());
     // Rerun: the robots are done, the bad one is tried again.
     let stamp = fs::metadata(dir.join("out/two/two.urdf"))
         .unwrap()

@@ -420,14 +420,16 @@ class Robot:
     """The result of :func:`robot`: what was written and what each link got.
 
     Attributes: ``name`` (the outputs' file stem), ``robot`` (the model's name in the file),
-    ``format`` (``"urdf"`` or ``"mjcf"``), ``out_dir``, ``urdf``, ``mjcf`` and ``curobo`` (the
-    paths of ``<name>.urdf``, ``<name>.xml`` and ``curobo.yml``), ``files`` (every path
-    written, ``curobo.yml`` last), ``parts`` and ``spheres`` (over all links), ``seconds``, and
-    ``links``: one dict per link of the file, in file order, with ``name``, ``meshes`` (mesh
-    geoms or collisions segmented), ``triangles``, ``parts``, ``shapes`` (each part's kind),
-    ``kept`` (the MJCF's own primitive colliders kept beside them), ``spheres`` (in
-    curobo.yml), ``tolerances_met`` and ``volumes`` (the path of its ``bvseg.volumes``
-    document, None for a link without meshes).
+    ``format`` (``"urdf"`` or ``"mjcf"``), ``out_dir``, ``urdf``, ``mjcf``, ``curobo`` and
+    ``manifest`` (the paths of ``<name>.urdf``, ``<name>.xml``, ``curobo.yml`` and
+    ``manifest.json``), ``files`` (every path written, ``manifest.json`` last), ``parts`` and
+    ``spheres`` (over all links), ``warnings`` (what was left as it was and why, one line
+    each: a mesh of a format bvseg cannot read, a link whose meshes enclose no volume),
+    ``seconds``, and ``links``: one dict per link of the file, in file order (an MJCF's world
+    body first, as ``world``), with ``name``, ``meshes`` (mesh geoms or collisions
+    segmented), ``triangles``, ``parts``, ``shapes`` (each part's kind), ``kept`` (the MJCF's
+    own primitive colliders, kept), ``spheres`` (in curobo.yml), ``tolerances_met`` and
+    ``volumes`` (the path of its ``bvseg.volumes`` document, None for a link not segmented).
     """
 
     __slots__ = ("_d",)
@@ -478,7 +480,7 @@ def robot(
     **params: Any,
 ) -> Robot:
     # The docstring is below, filled in with the defaults.
-    return Robot(
+    result = Robot(
         _bvseg.robot(
             os.fspath(path),
             os.fspath(out_dir),
@@ -491,6 +493,9 @@ def robot(
             **params,
         )
     )
+    for w in result.warnings:
+        _warnings.warn(w, BvsegWarning, stacklevel=2)
+    return result
 
 
 robot.__doc__ = f"""Segment every link of a robot and write it with primitive colliders, as
@@ -498,12 +503,15 @@ robot.__doc__ = f"""Segment every link of a robot and write it with primitive co
 
 ``path``: a URDF (``.urdf``) or MJCF (``.xml``) file. Each link's collision meshes
 (``source="visual"``: its visual ones) are segmented in the link's frame, and ``out_dir``
-(created if missing) gets ``<name>.urdf`` (the mesh collisions replaced by boxes, spheres,
-cylinders; capsules with ``urdf_capsules``), ``<name>.xml`` (MJCF), ``curobo.yml`` (cuRobo's
-``collision_spheres`` and ``self_collision_ignore``) and ``links/<link>.json``.
+(created if missing) gets ``<name>.urdf`` and ``<name>.xml``: the input file as it was but
+for its collision meshes, replaced by boxes, spheres and cylinders (capsules with
+``urdf_capsules``) in the same links, and the other format made from its links; an MJCF's
+included files beside it; ``curobo.yml`` (cuRobo's ``collision_spheres`` and
+``self_collision_ignore``), ``links/<link>.json``, and ``manifest.json``, written last.
 
-Budgets: ``max_parts`` per link, or ``total_parts`` for the whole robot shared among the
-links by volume (each at least one); ``spheres_per_link`` (default
+Budgets: ``max_parts`` per link (default {_bvseg.DEFAULT_PARTS_PER_LINK}), or ``total_parts``
+for the whole robot shared among the links by volume (each at least one);
+``spheres_per_link`` (default
 {_bvseg.DEFAULT_SPHERES_PER_LINK}) spheres per link in curobo.yml. The other keyword arguments
 are :func:`segment`'s (``samples``, ``tov``, ``max_protrusion``, ``kinds``, ``target``,
 ``k``, ``threads``, ``timeout`` for the whole robot, ...), applied to each link; the kinds
@@ -514,7 +522,9 @@ and ``spheres`` (whether it is the run for curobo.yml).
 Returns a :class:`Robot`. Raises :class:`RobotError` for a robot file that cannot be used
 (not XML, not a robot, a link name used twice, a joint whose parent or child is not a link,
 an include cycle), ``FileNotFoundError`` for a robot or mesh file that is not there,
-:class:`MeshError` for a link's mesh that cannot be read or encloses no volume (the message
-names the link and the file), ``ValueError``/``TypeError`` for bad arguments,
-``TimeoutError`` past ``timeout``. Nothing is written unless every link was segmented.
+:class:`MeshError` for a link's mesh that cannot be read (the message names the link and the
+file), ``ValueError``/``TypeError`` for bad arguments, ``TimeoutError`` past ``timeout``.
+Nothing is written unless every link was segmented. A mesh bvseg cannot replace (a format it
+does not read, meshes that enclose no volume) stays in the output as it was and is named in
+``warnings``, which are also issued as :class:`BvsegWarning`.
 """

@@ -14,6 +14,7 @@ class MeshError(ValueError): ...
 class RobotError(ValueError): ...
 
 ROBOT_DONE_FILE: str
+DEFAULT_PARTS_PER_LINK: int
 DEFAULT_SPHERES_PER_LINK: int
 
 class Mesh:

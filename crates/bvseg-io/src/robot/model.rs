@@ -245,7 +245,11 @@ impl Robot {
         if let Source::Mjcf(s) = &self.source {
             out.extend(s.files.iter().map(|f| f.path.clone()));
         }
-        out.extend(self.links.iter().flat_map(|l| l.meshes.iter().map(|m| m.path.clone())));
+        out.extend(
+            self.links
+                .iter()
+                .flat_map(|l| l.meshes.iter().map(|m| m.path.clone())),
+        );
         out.iter().filter_map(|p| p.canonicalize().ok()).collect()
     }
 
@@ -283,7 +287,10 @@ pub(crate) fn unreadable(path: &std::path::Path) -> Option<String> {
         return None;
     }
     Some(match ext {
-        Some(e) => format!("unsupported mesh format '.{e}' (bvseg reads {})", crate::SUPPORTED),
+        Some(e) => format!(
+            "unsupported mesh format '.{e}' (bvseg reads {})",
+            crate::SUPPORTED
+        ),
         None => format!("no file extension (bvseg reads {})", crate::SUPPORTED),
     })
 }

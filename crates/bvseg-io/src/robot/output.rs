@@ -147,7 +147,11 @@ impl RobotRun {
                 triangles: r.as_ref().map_or(0, |r| r.triangles),
                 parts: r.as_ref().map_or(0, |r| r.parts.parts.len()),
                 shapes: r.as_ref().map_or(Vec::new(), |r| {
-                    r.parts.parts.iter().map(|p| p.volume.shape.as_str()).collect()
+                    r.parts
+                        .parts
+                        .iter()
+                        .map(|p| p.volume.shape.as_str())
+                        .collect()
                 }),
                 spheres: r.as_ref().map_or(0, |r| r.spheres.parts.len()),
                 tolerances_met: r.as_ref().and_then(|r| r.tolerances_met),
@@ -194,12 +198,8 @@ impl RobotRun {
     /// [`IoError::BadPath`] when an output would replace one of the robot's own files (the
     /// robot file, a file it includes, a mesh): nothing is written then.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, IoError> {
-        let links = dir.join("links");
-        std::fs::create_dir_all(&links)
-            .map_err(|e| IoError::io(&links.display().to_string(), "create the directory", e))?;
-        let files = self.files(dir);
         let inputs = self.robot.inputs();
-        for (rel, _) in &files {
+        for (rel, _) in &self.files(dir) {
             let path = dir.join(rel);
             if let Ok(p) = path.canonicalize() {
                 if inputs.contains(&p) {
@@ -212,8 +212,12 @@ impl RobotRun {
                 }
             }
         }
+        let links = dir.join("links");
+        std::fs::create_dir_all(&links)
+            .map_err(|e| IoError::io(&links.display().to_string(), "create the directory", e))?;
         let mut written = Vec::new();
-        for (rel, bytes) in files {
+        // Again, now that `dir` exists: the MJCF's directories lead back from it.
+        for (rel, bytes) in self.files(dir) {
             let path = dir.join(rel);
             crate::write_atomic(&path, &bytes)?;
             written.push(path);
@@ -228,7 +232,11 @@ impl RobotRun {
 
     /// Parts over all links.
     pub fn total_parts(&self) -> usize {
-        self.links.iter().flatten().map(|l| l.parts.parts.len()).sum()
+        self.links
+            .iter()
+            .flatten()
+            .map(|l| l.parts.parts.len())
+            .sum()
     }
 
     /// Spheres over all links.

@@ -49,11 +49,7 @@ pub(crate) fn parse(
         let ctx = Ctx::new(&tree, name, &dir, source)?;
         let mut out = Out::default();
         ctx.world(&mut out)?;
-        let model = root
-            .1
-            .attribute("model")
-            .unwrap_or("robot")
-            .to_owned();
+        let model = root.1.attribute("model").unwrap_or("robot").to_owned();
         (model, ctx.dirs, ctx.has_meshdir, ctx.has_texturedir, out)
     };
     let (model, dirs, has_meshdir, has_texturedir, out) = read;
@@ -114,7 +110,11 @@ impl<'t> Tree<'t> {
                 out.push((f, c));
                 continue;
             }
-            if let Some(inc) = self.files[f].includes.iter().find(|i| i.element == c.range()) {
+            if let Some(inc) = self.files[f]
+                .includes
+                .iter()
+                .find(|i| i.element == c.range())
+            {
                 let root = self.docs[inc.file].root_element();
                 out.extend(self.kids((inc.file, root)));
             }
@@ -270,7 +270,9 @@ impl<'d, 't> Ctx<'d, 't> {
             let scale = vec3(attr("scale"), DVec3::ONE, "mesh scale", name)?;
             let refpos = vec3(attr("refpos"), DVec3::ZERO, "mesh refpos", name)?;
             let refquat = match attr("refquat") {
-                Some(q) => ctx.angles.orientation(|a| (a == "quat").then_some(q), name)?,
+                Some(q) => ctx
+                    .angles
+                    .orientation(|a| (a == "quat").then_some(q), name)?,
                 None => DQuat::IDENTITY,
             };
             let reference = (refpos != DVec3::ZERO || refquat != DQuat::IDENTITY).then(|| {
@@ -386,14 +388,11 @@ impl<'d, 't> Ctx<'d, 't> {
             kept: Vec::new(),
         });
         let text = &self.tree.files[el.0].text;
-        out.inserts.push(
-            text[node.range()]
-                .rfind("</")
-                .map(|close| Insert {
-                    file: el.0,
-                    at: node.range().start + close,
-                }),
-        );
+        out.inserts
+            .push(text[node.range()].rfind("</").map(|close| Insert {
+                file: el.0,
+                at: node.range().start + close,
+            }));
         let has_inertial = kids.iter().any(|(_, n)| n.has_tag_name("inertial"));
         out.from_geoms
             .push(self.inertia_from_geoms.unwrap_or(!has_inertial));
@@ -444,7 +443,9 @@ impl<'d, 't> Ctx<'d, 't> {
         joint.axis = vec3(attr("axis"), DVec3::Z, "joint axis", self.name)?;
         let range = match attr("range") {
             Some(r) => match numbers(r, "joint range", self.name)?[..] {
-                [lo, hi] if t == "hinge" => Some((self.angles.radians(lo), self.angles.radians(hi))),
+                [lo, hi] if t == "hinge" => {
+                    Some((self.angles.radians(lo), self.angles.radians(hi)))
+                }
                 [lo, hi] => Some((lo, hi)),
                 _ => return Err(self.bad(format!("joint range {r:?}: expected 2 numbers"))),
             },
@@ -492,7 +493,9 @@ impl<'d, 't> Ctx<'d, 't> {
             match attr(a) {
                 None => Ok(1),
                 Some(s) => s.trim().parse::<i64>().map_err(|_| {
-                    self.bad(format!("body {link_name:?}: geom {a} {s:?} is not an integer"))
+                    self.bad(format!(
+                        "body {link_name:?}: geom {a} {s:?} is not an integer"
+                    ))
                 }),
             }
         };
@@ -510,9 +513,8 @@ impl<'d, 't> Ctx<'d, 't> {
         if !wanted {
             return Ok(());
         }
-        let mesh = attr("mesh").ok_or_else(|| {
-            self.bad(format!("body {link_name:?}: a mesh geom names no mesh"))
-        })?;
+        let mesh = attr("mesh")
+            .ok_or_else(|| self.bad(format!("body {link_name:?}: a mesh geom names no mesh")))?;
         let asset = self.assets.get(mesh).ok_or_else(|| {
             self.bad(format!(
                 "body {link_name:?}: geom names the mesh {mesh:?}, which no <mesh> asset defines"
@@ -581,7 +583,9 @@ impl<'d, 't> Ctx<'d, 't> {
                 replace = false;
             }
         }
-        let group = attr("group").and_then(|s| s.trim().parse::<i64>().ok()).unwrap_or(0);
+        let group = attr("group")
+            .and_then(|s| s.trim().parse::<i64>().ok())
+            .unwrap_or(0);
         let zero = |a: &str| attr(a).and_then(|s| s.trim().parse::<f64>().ok()) == Some(0.0);
         let massless = zero("mass") || (attr("mass").is_none() && zero("density"));
         let (lo, hi) = self.inertia_groups;
@@ -693,12 +697,7 @@ impl<'d, 't> Ctx<'d, 't> {
 
 /// Reads a `<default>` element (class `main` when it has no name) and its nested classes
 /// into `classes`, each over the attributes it inherits.
-fn defaults(
-    tree: &Tree,
-    el: El,
-    inherited: &Defaults,
-    classes: &mut BTreeMap<String, Defaults>,
-) {
+fn defaults(tree: &Tree, el: El, inherited: &Defaults, classes: &mut BTreeMap<String, Defaults>) {
     let mut d = inherited.clone();
     let kids = tree.kids(el);
     for (tag, map) in [

@@ -70,11 +70,7 @@ pub(crate) fn to_mjcf_files(
         }
         e.replace(file.root_open, file.root_open, head);
         for inc in &file.includes {
-            e.replace(
-                inc.value.start,
-                inc.value.end,
-                escape(&names[inc.file]),
-            );
+            e.replace(inc.value.start, inc.value.end, escape(&names[inc.file]));
         }
     }
     if !rebase.is_empty() {
@@ -117,16 +113,16 @@ pub(crate) fn to_mjcf_files(
                 if site.carrier {
                     // Stays for its mass, no longer colliding.
                     let name_end = site.range.start + "<geom".len();
-                    e.replace(name_end, name_end, " contype=\"0\" conaffinity=\"0\"".into());
+                    e.replace(
+                        name_end,
+                        name_end,
+                        " contype=\"0\" conaffinity=\"0\"".into(),
+                    );
                     for r in &site.collision_attrs {
                         e.replace(r.start, r.end, String::new());
                     }
                     if k == 0 {
-                        e.replace(
-                            site.range.end,
-                            site.range.end,
-                            format!("\n{indent}{new}"),
-                        );
+                        e.replace(site.range.end, site.range.end, format!("\n{indent}{new}"));
                     }
                 } else if k == 0 {
                     e.replace(site.range.start, site.range.end, new.clone());
