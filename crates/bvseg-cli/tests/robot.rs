@@ -643,3 +643,74 @@ fn batch_runs_robots_one_directory_each() {
         .unwrap();
     assert_eq!(stamp, again);
 }
+
+/// With the visual meshes as the source, a body whose colliding geoms are all primitives gets
+/// its new geoms before its end tag, colliding whatever its class says; a primitive sized
+/// from a mesh stays MuJoCo's own.
+#[test]
+fn visual_meshes_give_a_body_new_colliders() {
+    let dir = scratch("robot_mjcf_visual");
+    setup(&dir);
+    fs::write(
+        dir.join("v.xml"),
+        r#"<mujoco model="v">
+  <default><default class="visual"><geom type="mesh" contype="0" conaffinity="0"/></default></default>
+  <asset><mesh name="base" file="meshes/base.obj"/></asset>
+  <worldbody>
+    <body name="b" childclass="visual">
+      <geom mesh="base"/>
+      <geom class="main" type="box" size="0.1 0.1 0.1"/>
+      <geom class="main" type="box" mesh="base"/>
+    </body>
+  </worldbody>
+</mujoco>
+"#,
+    )
+    .unwrap();
+    let out = run(
+        BIN,
+        &dir,
+        &[
+            "robot",
+            "v.xml",
+            "-o",
+            "out",
+            "--source",
+            "visual",
+            "--samples",
+            "2000",
+            "-q",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let xml = fs::read_to_string(dir.join("out/v.xml")).unwrap();
+    let b = &xml[xml.find("<body").unwrap()..xml.find("</body>").unwrap()];
+    assert!(b.contains("<geom mesh=\"base\"/>"), "{b}");
+    assert!(
+        b.contains("<geom class=\"main\" type=\"box\" mesh=\"base\"/>"),
+        "{b}"
+    );
+    let new: Vec<&str> = b.lines().filter(|l| l.contains("b_bvseg_")).collect();
+    assert!(!new.is_empty(), "{b}");
+    assert!(new
+        .iter()
+        .all(|l| l.contains("contype=\"1\" conaffinity=\"1\"")));
+    // Without --source visual the body has no colliding mesh geom: the file comes back as it
+    // was, but for bvseg's comment.
+    let out = run(
+        BIN,
+        &dir,
+        &["robot", "v.xml", "-o", "out2", "--samples", "2000", "-q"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let xml = fs::read_to_string(dir.join("out2/v.xml")).unwrap();
+    assert!(!xml.contains("_bvseg_"), "{xml}");
+}

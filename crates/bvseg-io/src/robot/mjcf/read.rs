@@ -387,12 +387,18 @@ impl<'d, 't> Ctx<'d, 't> {
             meshes: Vec::new(),
             kept: Vec::new(),
         });
+        // Only the visual meshes' volumes may need a place of their own (in a body whose
+        // colliding geoms are all primitives).
         let text = &self.tree.files[el.0].text;
-        out.inserts
-            .push(text[node.range()].rfind("</").map(|close| Insert {
-                file: el.0,
-                at: node.range().start + close,
-            }));
+        out.inserts.push(
+            text[node.range()]
+                .rfind("</")
+                .filter(|_| self.source == MeshSource::Visual)
+                .map(|close| Insert {
+                    file: el.0,
+                    at: node.range().start + close,
+                }),
+        );
         let has_inertial = kids.iter().any(|(_, n)| n.has_tag_name("inertial"));
         out.from_geoms
             .push(self.inertia_from_geoms.unwrap_or(!has_inertial));
@@ -741,4 +747,54 @@ fn canonical_dir(dir: &Path) -> PathBuf {
         dir
     };
     d.canonicalize().unwrap_or_else(|_| dir.to_path_buf())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::robot::{read_robot, JointKind};
+
+    /// A mesh with `refpos`, `refquat` and `scale`, turned by its class, in a body inside a
+    /// `<frame>`: its file's vertices land where MuJoCo 4.0.0 puts them (`mesh_vert` placed by
+    /// `geom_xpos` and `geom_xmat`, less the body's place: figures printed by MuJoCo).
+    #[test]
+    fn meshes_are_placed_as_mujoco_places_them() {
+        let dir = bvseg_testkit::scratch("mjcf_placed");
+        std::fs::write(
+            dir.join("m.obj"),
+            "v 2 0 0\nv 2 1 0\nv 2 0 1\nv 3 0 0\nf 1 2 3\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("t.xml"),
+            r#"<mujoco><compiler angle="degree"/>
+  <default><default class="c"><geom type="mesh" euler="0 0 90"/></default></default>
+  <asset><mesh name="m" file="m.obj" scale="2 2 2" refpos="1 0 0"
+    refquat="0.7071067811865476 0 0 0.7071067811865476"/></asset>
+  <worldbody><frame pos="0 0 1"><body name="b" pos="1 0 0">
+    <joint name="j" range="-90 90"/><geom class="c" mesh="m" pos="0 0 0.5"/>
+  </body></frame></worldbody></mujoco>"#,
+        )
+        .unwrap();
+        let robot = read_robot(dir.join("t.xml"), MeshSource::Collision).unwrap();
+        assert_eq!(robot.links[0].name, "world");
+        let m = &robot.links[1].meshes[0];
+        let mujoco = [
+            ([2.0, 0.0, 0.0], [2.0, 0.0, 0.5]),
+            ([2.0, 1.0, 0.0], [2.0, 2.0, 0.5]),
+            ([2.0, 0.0, 1.0], [2.0, 0.0, 2.5]),
+            ([3.0, 0.0, 0.0], [4.0, 0.0, 0.5]),
+        ];
+        for (file, want) in mujoco {
+            let got = m.place(DVec3::from_array(file));
+            assert!((got - DVec3::from_array(want)).length() < 1e-12, "{got}");
+        }
+        let j = &robot.joints[0];
+        assert_eq!((j.name.as_str(), j.parent.as_str()), ("j", "world"));
+        assert_eq!(j.kind, JointKind::Revolute);
+        assert!((j.origin.translation - DVec3::new(1.0, 0.0, 1.0)).length() < 1e-12);
+        let (lo, hi) = j.limit.unwrap();
+        assert!((hi - std::f64::consts::FRAC_PI_2).abs() < 1e-12 && lo == -hi);
+    }
 }
