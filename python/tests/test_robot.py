@@ -173,7 +173,7 @@ def test_progress_and_its_exceptions(tmp_path):
 
 def test_timeout(tmp_path):
     with pytest.raises(TimeoutError, match=r"gave up after 0.05 s \(timeout\)"):
-        bvseg.robot(ARM, tmp_path / "out", tov=0.001, max_k=1000, timeout=0.05)
+        bvseg.robot(ARM, tmp_path / "out", tov=0.001, max_k=1000, max_parts=1000, timeout=0.05)
     assert not (tmp_path / "out").exists()
 
 

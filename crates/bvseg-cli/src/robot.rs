@@ -33,10 +33,9 @@ pub struct RobotBudgetArgs {
     #[arg(long, value_enum, default_value_t = SourceArg::Collision)]
     pub source: SourceArg,
 
-    /// Robots: most parts per link (each link's --max-k is the smaller of this and
-    /// --max-k) [default: 5]
-    #[arg(long, value_name = "N", conflicts_with = "total_parts", value_parser = clap::value_parser!(u64).range(1..=4096))]
-    pub max_parts: Option<u64>,
+    /// Robots: most parts per link (each link's --max-k is the smaller of this and --max-k).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_PARTS_PER_LINK as u64, conflicts_with = "total_parts", value_parser = clap::value_parser!(u64).range(1..=4096))]
+    pub max_parts: u64,
 
     /// Robots: most parts for the whole robot, shared among links by their volume (each at
     /// least 1).
@@ -62,10 +61,9 @@ impl RobotBudgetArgs {
                 SourceArg::Visual => MeshSource::Visual,
             },
             params,
-            parts: match (self.max_parts, self.total_parts) {
-                (_, Some(n)) => PartBudget::Total(n as usize),
-                (Some(n), None) => PartBudget::PerLink(n as usize),
-                (None, None) => PartBudget::PerLink(DEFAULT_PARTS_PER_LINK),
+            parts: match self.total_parts {
+                Some(n) => PartBudget::Total(n as usize),
+                None => PartBudget::PerLink(self.max_parts as usize),
             },
             spheres_per_link: self.spheres_per_link as usize,
             urdf_capsules: self.urdf_capsules,

@@ -17,7 +17,7 @@ pub const DEFAULT_SPHERES_PER_LINK: usize = 16;
 /// Default per-link budget ([`PartBudget::PerLink`]): engines and planners want a few
 /// primitives per link, and on the measured robots (docs/robots.md, "Budgets") more parts
 /// per link tighten the colliders less than each costs.
-pub const DEFAULT_PARTS_PER_LINK: usize = 5;
+pub const DEFAULT_PARTS_PER_LINK: usize = 4;
 
 /// How many parts the links get.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
