@@ -4,6 +4,7 @@
 //! primitive geoms in the same bodies ([`splice`]); a URDF input as a new MJCF ([`build`]).
 mod build;
 mod files;
+mod geom;
 mod orient;
 mod read;
 mod splice;
