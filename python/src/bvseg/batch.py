@@ -14,7 +14,7 @@ mesh in the mirror of its subdirectory under OUT_DIR, named as the command line 
 root is ``<mujoco>`` and that bvseg did not write) run :func:`bvseg.robot` into a directory
 of their own under that name, one robot per task. Outputs are written atomically, so an
 output that exists is complete, and a mesh whose outputs all exist is skipped (a robot whose
-``curobo.yml``, written last, exists; ``--force`` redoes it): an interrupted batch resumes
+``manifest.json``, written last, exists; ``--force`` redoes it): an interrupted batch resumes
 where it stopped. ``OUT_DIR/summary.csv`` (and ``summary.parquet``
 when pyarrow is importable) has one row per mesh, sorted by file: file, status (done, skipped,
 error), triangles, k, tov, mov, protrusion_rel, tolerances_met, seconds, message (the error,
@@ -454,7 +454,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--concurrency", type=int, metavar="N", help="ray engine: most tasks at once (default: as the cluster's CPUs allow)")
     p.add_argument("--strict", action="store_true", help="exit 3 when some mesh missed its tolerances")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on stderr but errors")
-    from . import DEFAULTS
+    from . import DEFAULTS, _bvseg
 
     s = p.add_argument_group("segment options (as bvseg segment; the defaults are the core's)")
     def d(name: str) -> str:
@@ -478,7 +478,7 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--timeout", type=float, metavar="SECONDS", help="give up on a mesh (a whole robot) after this long")
     r = p.add_argument_group("robot options (as bvseg robot)")
     r.add_argument("--source", choices=("collision", "visual"), help="which meshes of each link to segment (default: collision)")
-    r.add_argument("--max-parts", type=int, metavar="N", help="most parts per link")
+    r.add_argument("--max-parts", type=int, metavar="N", help=f"most parts per link (default: {_bvseg.DEFAULT_PARTS_PER_LINK})")
     r.add_argument("--total-parts", type=int, metavar="N", help="most parts per robot, shared among its links by volume")
     r.add_argument("--spheres-per-link", type=int, metavar="N", help="most spheres per link in curobo.yml (default: 16)")
     r.add_argument("--urdf-capsules", action="store_true", help="write capsules as URDF 1.1 <capsule>")
