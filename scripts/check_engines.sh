@@ -152,11 +152,16 @@ robot() {
     # The shared judge of MJCF robots, on a new MJCF of an MJCF.
     if [ -n "$judge" ] && [ "${original##*.}" = xml ]; then
         local verdict
-        if verdict=$("$py" "$judge" "$original" "$dir/$stem.xml" --json 2>&1) &&
-            "$py" -c 'import json, sys; r = json.loads(sys.argv[1].splitlines()[-1]); sys.exit(not (r["min_enclosed"] >= 1.0 and r["mesh_geoms_left"] == 0))' "$verdict"; then
-            echo "OK robot $name $stem.xml by bvrobot_mjcf.py: $(tail -n 1 <<<"$verdict" | cut -c1-120)"
+        local summary='import json, sys
+r = json.loads(sys.argv[1].splitlines()[-1])
+m, n, left = r["min_enclosed"], r["bodies_with_meshes"], r["mesh_geoms_left"]
+print(f"min_enclosed {m} over {n} bodies, mesh geoms left {left}")
+sys.exit(not (r["min_enclosed"] >= 1.0 and r["mesh_geoms_left"] == 0))'
+        if verdict=$("$py" "$judge" "$original" "$dir/$stem.xml" --json 2>>"$dir.log") &&
+            line=$("$py" -c "$summary" "$verdict"); then
+            echo "OK robot $name $stem.xml by bvrobot_mjcf.py: $line"
         else
-            echo "FAIL robot $name $stem.xml by bvrobot_mjcf.py: $(tail -n 3 <<<"$verdict")"
+            echo "FAIL robot $name $stem.xml by bvrobot_mjcf.py: ${line:-$(tail -n 3 "$dir.log")}"
             failed=1
         fi
         checked=$((checked + 1))

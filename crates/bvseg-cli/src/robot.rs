@@ -107,10 +107,10 @@ pub fn run(args: &RobotArgs) -> anyhow::Result<ExitCode> {
         args.quiet,
     )?;
     run.write(&args.output)?;
-    for w in &run.warnings {
-        eprintln!("bvseg: warning: {w}");
-    }
     if !args.quiet {
+        for w in &run.warnings {
+            eprintln!("bvseg: warning: {w}");
+        }
         eprintln!(
             "bvseg: {}: {} links, {} parts, {} spheres in {:.1} s -> {}",
             args.robot.display(),

@@ -495,7 +495,7 @@ fn meshes_that_cannot_be_replaced_stay_with_a_warning() {
         let out = run(
             BIN,
             &dir,
-            &["robot", name, "-o", "out", "--samples", "3000", "-q"],
+            &["robot", name, "-o", "out", "--samples", "3000"],
         );
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{name}: {err}");
