@@ -5,11 +5,11 @@
 //! primitives (URDF and MJCF alike), the other format made from the links, cuRobo's collision
 //! spheres, and a manifest written last.
 //!
-//! - [`model`]: the robot, whatever file it came from; [`paths`], [`geometry`]: what both
+//! - `model`: the robot, whatever file it came from; `paths`, `geometry`: what both
 //!   readers need;
-//! - [`urdf`] and [`mjcf`]: each format's reader and writers (the writers edit the text the
-//!   reader kept, through [`text`]); [`curobo`]: the spheres;
-//! - [`run`]: the run, [`output`]: its result and files.
+//! - `urdf` and `mjcf`: each format's reader and writers (the writers edit the text the
+//!   reader kept, through `text`); `curobo`: the spheres;
+//! - `run`: the run, `output`: its result and files.
 //!
 //! Reading checks everything a run needs before any segmentation: every mesh file exists,
 //! link names are unique, every joint joins two links, MJCF includes do not cycle. What it
