@@ -83,7 +83,7 @@ pub use result::{
     HierarchyNode, Metrics, Part, Segmentation, Step, StepKind, Tolerance, Unmet, BUDGET_WARNING,
 };
 pub use rig::{Joint, Pose, Rig, Skeleton, Skin};
-pub use volume::{BoundingVolume, Polytope, Shape, ShapeView};
+pub use volume::{BoundingVolume, Polytope, Shape, ShapeView, BALL_COVER_VERTICES};
 
 /// The stages' own entry points, for the benchmarks, the fuzz targets and the tests that
 /// check one stage at a time. Not part of the API: anything here may change in any release.

@@ -6,6 +6,9 @@
 //! scan lattices, scale volumes or sample their boundaries need one code path with a
 //! per-shape inside test. A hull carries its polyhedron in those local coordinates.
 mod polytope;
+mod ball_cover;
+
+pub use ball_cover::BALL_COVER_VERTICES;
 
 use crate::math;
 use std::sync::Arc;

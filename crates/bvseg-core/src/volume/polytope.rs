@@ -53,6 +53,38 @@ impl Polytope {
         })
     }
 
+    /// The octahedron `|x| + |y| + |z| <= sqrt(3)`, whose faces touch the unit ball: the
+    /// fallback of [`Polytope::around_unit_ball`], built without a hull so that it cannot
+    /// fail.
+    pub(super) fn octahedron_around_unit_ball() -> Self {
+        let r = 3f64.sqrt();
+        let vertices = vec![
+            DVec3::X * r,
+            -DVec3::X * r,
+            DVec3::Y * r,
+            -DVec3::Y * r,
+            DVec3::Z * r,
+            -DVec3::Z * r,
+        ];
+        // Each octant's face, wound outward (x, y, z in the octant's signs).
+        let mut triangles = Vec::with_capacity(8);
+        let mut planes = Vec::with_capacity(8);
+        for s in 0..8u32 {
+            let (x, y, z) = (s & 1, 2 + ((s >> 1) & 1), 4 + ((s >> 2) & 1));
+            let sign = |i: u32| if i % 2 == 0 { 1.0 } else { -1.0 };
+            let n = DVec3::new(sign(x), sign(y), sign(z)) / r;
+            // (x, y, z) is counter-clockwise seen from outside when the octant is even.
+            let odd = (s & 1) ^ ((s >> 1) & 1) ^ ((s >> 2) & 1);
+            triangles.push(if odd == 0 { [x, y, z] } else { [x, z, y] });
+            planes.push((n, 1.0));
+        }
+        Self {
+            vertices,
+            triangles,
+            planes,
+        }
+    }
+
     /// The vertices.
     pub fn vertices(&self) -> &[DVec3] {
         &self.vertices
