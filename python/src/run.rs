@@ -209,6 +209,7 @@ impl PySegmentation {
         let options = ExportOptions {
             mesh: with_mesh.then_some(&loaded.mesh),
             skinning: loaded.skinning.as_deref(),
+            ..ExportOptions::default()
         };
         py.detach(|| write_output(&path, &self.seg, &options))
             .map_err(errors::output_io)

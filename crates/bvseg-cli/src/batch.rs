@@ -16,7 +16,7 @@ use bvseg_io::export::{write_output, ExportOptions, OutputFormat};
 use bvseg_io::robot::RobotOptions;
 use clap::Args;
 
-use crate::common::{self, InputArgs, ParamArgs};
+use crate::common::{self, InputArgs, ParamArgs, UsdArgs};
 use crate::progress::{batch_bar, Progress};
 use crate::robot::{run_robot, RobotBudgetArgs};
 use crate::EXIT_TOLERANCE;
@@ -33,7 +33,7 @@ pub struct BatchArgs {
     #[arg(short, long, value_name = "OUTDIR")]
     pub output: PathBuf,
 
-    /// Output formats, by extension: json, glb, xml (MJCF), obj.
+    /// Output formats, by extension: json, glb, xml (MJCF), obj, usda.
     #[arg(
         long,
         value_name = "EXT",
@@ -54,6 +54,9 @@ pub struct BatchArgs {
 
     #[command(flatten)]
     pub robot: RobotBudgetArgs,
+
+    #[command(flatten)]
+    pub usd: UsdArgs,
 
     /// Print nothing on stderr but errors.
     #[arg(short, long)]
@@ -290,7 +293,11 @@ fn process(
         |_| {},
     )?;
     for o in outs {
-        write_output(o, &seg, &ExportOptions::default())?;
+        let options = ExportOptions {
+            usd: args.usd.options(),
+            ..ExportOptions::default()
+        };
+        write_output(o, &seg, &options)?;
     }
     let m = seg.metrics;
     let met = seg.tolerances_met(params);

@@ -6,7 +6,7 @@ use anyhow::{anyhow, bail};
 use bvseg_core::{
     Cancel, Kinds, Mesh, Params, Sampling, Segmentation, Segmenter, SkeletonMode, Step, Target,
 };
-use bvseg_io::export::OutputFormat;
+use bvseg_io::export::{OutputFormat, UpAxis, UsdOptions};
 use bvseg_io::{LoadOptions, LoadedMesh};
 use clap::Args;
 
@@ -38,6 +38,52 @@ pub struct InputArgs {
     /// Refuse meshes with more triangles than this.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_TRIANGLES)]
     pub max_triangles: usize,
+}
+
+/// What a `.usda` output declares: the stage's up axis and units, and whether its root is a
+/// rigid body. The volumes are written in the mesh's own coordinates either way.
+#[derive(Args, Debug, Clone)]
+pub struct UsdArgs {
+    /// USD output: the stage's upAxis, Y or Z. It declares the mesh's convention and does
+    /// not rotate anything (glTF files are Y-up; URDF, MuJoCo and many CAD exports Z-up).
+    #[arg(long, value_name = "Y|Z", value_parser = parse_up_axis, default_value = "Y")]
+    pub up_axis: UpAxis,
+
+    /// USD output: the stage's metersPerUnit, the length of one mesh unit in meters (0.01
+    /// for a mesh in centimeters). It declares the units and does not scale anything.
+    #[arg(long, value_name = "M", value_parser = parse_meters_per_unit, default_value_t = 1.0)]
+    pub meters_per_unit: f64,
+
+    /// USD output: make the root prim a rigid body (PhysicsRigidBodyAPI), its colliders one
+    /// compound; without it they are static colliders.
+    #[arg(long)]
+    pub usd_rigid_body: bool,
+}
+
+impl UsdArgs {
+    /// The writer's options.
+    pub fn options(&self) -> UsdOptions {
+        UsdOptions {
+            up_axis: self.up_axis,
+            meters_per_unit: self.meters_per_unit,
+            rigid_body: self.usd_rigid_body,
+        }
+    }
+}
+
+fn parse_up_axis(s: &str) -> Result<UpAxis, String> {
+    match s {
+        "Y" | "y" => Ok(UpAxis::Y),
+        "Z" | "z" => Ok(UpAxis::Z),
+        _ => Err(format!("expected Y or Z, got {s:?}")),
+    }
+}
+
+fn parse_meters_per_unit(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(m) if m.is_finite() && m > 0.0 => Ok(m),
+        _ => Err(format!("expected a number above 0, got {s:?}")),
+    }
 }
 
 /// The segmentation's parameters.
@@ -463,7 +509,8 @@ mod tests {
             .to_string();
         assert_eq!(
             e,
-            "out.ply: unsupported output format '.ply' (supported: .json, .glb, .xml (MJCF), .obj)"
+            "out.ply: unsupported output format '.ply' (supported: .json, .glb, .xml (MJCF), .obj, \
+             .usda)"
         );
         let e = check_output(Path::new("no/such/dir/out.json"), true)
             .unwrap_err()

@@ -10,7 +10,7 @@ use bvseg_io::export::{write_labels, write_output, ExportOptions, OutputFormat};
 use bvseg_io::{CliSummary, LoadedMesh, RunSummary};
 use clap::Args;
 
-use crate::common::{self, InputArgs, ParamArgs};
+use crate::common::{self, InputArgs, ParamArgs, UsdArgs};
 use crate::progress::Progress;
 use crate::EXIT_TOLERANCE;
 
@@ -27,13 +27,17 @@ pub struct SegmentArgs {
     pub params: ParamArgs,
 
     /// Write the volumes here; the extension picks the format: .json (bvseg.volumes/1),
-    /// .glb (glTF with colliders), .xml (MuJoCo MJCF), .obj (proxy meshes). Repeatable.
+    /// .glb (glTF with colliders), .xml (MuJoCo MJCF), .obj (proxy meshes), .usda (USD with
+    /// UsdPhysics colliders). Repeatable.
     #[arg(short, long, value_name = "FILE")]
     pub output: Vec<PathBuf>,
 
     /// GLB output: also include the input mesh, with vertex colours by part.
     #[arg(long)]
     pub with_mesh: bool,
+
+    #[command(flatten)]
+    pub usd: UsdArgs,
 
     /// Write one part index per triangle of the file to this text file (-1 for triangles
     /// dropped as degenerate).
@@ -98,6 +102,7 @@ pub fn run(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     let options = ExportOptions {
         mesh: args.with_mesh.then_some(mesh),
         skinning: loaded.skinning.as_deref(),
+        usd: args.usd.options(),
     };
     for out in &args.output {
         write_output(out, &seg, &options)?;
@@ -209,7 +214,7 @@ fn print_summary(
 ) -> anyhow::Result<()> {
     let m = &seg.metrics;
     let written = if outputs.is_empty() {
-        "not written (use -o FILE.json, .glb, .xml or .obj)".to_owned()
+        "not written (use -o FILE.json, .glb, .xml, .obj or .usda)".to_owned()
     } else {
         common::shown(outputs).join(", ")
     };

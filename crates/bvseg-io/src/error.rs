@@ -35,6 +35,14 @@ pub enum IoError {
         /// What is wrong.
         message: String,
     },
+    /// An output option is out of range (e.g. USD's meters per unit).
+    #[error("{name}: {message}")]
+    BadOption {
+        /// The output, as the caller named it.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The path cannot be used as asked (a directory where a file is needed, no file name).
     #[error("{name}: {message}")]
     BadPath {

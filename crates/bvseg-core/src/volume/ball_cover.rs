@@ -132,7 +132,10 @@ mod tests {
         assert!(o.planes().iter().all(|&(_, d)| d >= 1.0));
         for (t, &(n, _)) in o.triangles().iter().zip(o.planes()) {
             let [a, b, c] = t.map(|i| o.vertices()[i as usize]);
-            assert!((b - a).cross(c - a).normalize().dot(n) > 1.0 - 1e-12, "{t:?}");
+            assert!(
+                (b - a).cross(c - a).normalize().dot(n) > 1.0 - 1e-12,
+                "{t:?}"
+            );
         }
         assert!((o.volume() - 4.0 / 3.0 * 3f64.sqrt().powi(3)).abs() < 1e-9);
         for u in fibonacci(500) {

@@ -5,8 +5,8 @@
 //! shape in local coordinates `t_j = axes_j . (x - center) / radii_j`, so the stages that
 //! scan lattices, scale volumes or sample their boundaries need one code path with a
 //! per-shape inside test. A hull carries its polyhedron in those local coordinates.
-mod polytope;
 mod ball_cover;
+mod polytope;
 
 pub use ball_cover::BALL_COVER_VERTICES;
 

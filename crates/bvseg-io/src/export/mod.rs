@@ -1,5 +1,6 @@
-//! Engine-ready outputs: a glTF binary ([`to_glb`]), MuJoCo MJCF ([`to_mjcf`]), the proxies
-//! as an OBJ ([`to_obj`]) and per-triangle part labels ([`to_labels`]). [`write_output`]
+//! Engine-ready outputs: a glTF binary ([`to_glb`]), MuJoCo MJCF ([`to_mjcf`]), USD with
+//! UsdPhysics colliders ([`to_usda`]), the proxies as an OBJ ([`to_obj`]) and per-triangle
+//! part labels ([`to_labels`]). [`write_output`]
 //! picks the format from the file's extension and writes atomically.
 //!
 //! Every writer is deterministic: equal segmentations give byte-identical files.
@@ -7,6 +8,7 @@ mod glb;
 pub(crate) mod mjcf;
 mod obj;
 mod proxy;
+pub(crate) mod usd;
 
 use std::path::Path;
 
@@ -18,6 +20,7 @@ pub use glb::{to_glb, to_glb_skinned};
 pub use mjcf::to_mjcf;
 pub use obj::to_obj;
 pub use proxy::{enclosing_points, part_color, volume_rotation, y_up_rotation};
+pub use usd::{to_usda, UpAxis, UsdOptions};
 
 /// An output format, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -30,10 +33,12 @@ pub enum OutputFormat {
     Mjcf,
     /// `.obj`: the volumes as meshes, one object per part.
     Obj,
+    /// `.usda`: USD text with one UsdPhysics collider prim per volume.
+    Usda,
 }
 
 /// The output extensions, for messages.
-pub const OUTPUT_EXTENSIONS: &str = ".json, .glb, .xml (MJCF), .obj";
+pub const OUTPUT_EXTENSIONS: &str = ".json, .glb, .xml (MJCF), .obj, .usda";
 
 impl OutputFormat {
     /// The format named by `path`'s extension.
@@ -48,6 +53,7 @@ impl OutputFormat {
             Some("glb") => Ok(Self::Glb),
             Some("xml") => Ok(Self::Mjcf),
             Some("obj") => Ok(Self::Obj),
+            Some("usda") => Ok(Self::Usda),
             _ => Err(IoError::UnsupportedFormat {
                 name: path.display().to_string(),
                 what: "output",
@@ -76,14 +82,17 @@ pub struct ExportOptions<'a> {
     /// joints are then the file's nodes, animated as in the file, and `mesh` is written
     /// skinned ([`to_glb_skinned`]).
     pub skinning: Option<&'a crate::Skinning>,
+    /// USD: the stage's up axis and units, and whether the root is a rigid body.
+    pub usd: UsdOptions,
 }
 
 /// Writes `seg` to `path` in the format its extension names, atomically.
 ///
 /// # Errors
 ///
-/// [`IoError::UnsupportedFormat`] for an unknown extension, and the errors of
-/// [`crate::write_atomic`].
+/// [`IoError::UnsupportedFormat`] for an unknown extension, [`IoError::BadOption`] for a
+/// `.usda` output whose [`UsdOptions::meters_per_unit`] is not finite and above 0, and the
+/// errors of [`crate::write_atomic`].
 pub fn write_output(
     path: impl AsRef<Path>,
     seg: &Segmentation,
@@ -96,16 +105,27 @@ pub fn write_output(
             Some(s) => to_glb_skinned(seg, options.mesh, s),
             None => to_glb(seg, options.mesh),
         },
-        OutputFormat::Mjcf => {
-            let model = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "bvseg".into());
-            to_mjcf(seg, &model).into_bytes()
-        }
+        OutputFormat::Mjcf => to_mjcf(seg, &stem(path)).into_bytes(),
         OutputFormat::Obj => to_obj(seg).into_bytes(),
+        OutputFormat::Usda => {
+            let mpu = options.usd.meters_per_unit;
+            if !(mpu.is_finite() && mpu > 0.0) {
+                return Err(IoError::BadOption {
+                    name: path.display().to_string(),
+                    message: format!("meters per unit must be finite and above 0, got {mpu}"),
+                });
+            }
+            to_usda(seg, &stem(path), &options.usd).into_bytes()
+        }
     };
     write_atomic(path, &bytes)
+}
+
+/// The file name of `path` without its extension, `bvseg` without one: the model's name.
+fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "bvseg".into())
 }
 
 /// One part index per triangle of the segmented mesh, one per line.

@@ -2,13 +2,13 @@
 //! collide with, placed in the link's frame, and the joints between them), each link
 //! segmented ([`segment_robot`]: one [`LinkResult`] per link), and the robot written back
 //! ([`RobotRun::write`]): the input file as it was but for its collision meshes, replaced by
-//! primitives (URDF and MJCF alike), the other format made from the links, cuRobo's collision
-//! spheres, and a manifest written last.
+//! primitives (URDF and MJCF alike), the other format made from the links, the colliders as
+//! USD, cuRobo's collision spheres, and a manifest written last.
 //!
 //! - `model`: the robot, whatever file it came from; `paths`, `geometry`: what both
 //!   readers need;
 //! - `urdf` and `mjcf`: each format's reader and writers (the writers edit the text the
-//!   reader kept, through `text`); `curobo`: the spheres;
+//!   reader kept, through `text`); `curobo`: the spheres; `usd`: the colliders as USD;
 //! - `run`: the run, `output`: its result and files.
 //!
 //! Reading checks everything a run needs before any segmentation: every mesh file exists,
@@ -23,6 +23,7 @@ mod paths;
 mod run;
 mod text;
 mod urdf;
+mod usd;
 
 use std::path::{Path, PathBuf};
 

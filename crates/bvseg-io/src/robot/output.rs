@@ -1,6 +1,6 @@
 //! What a robot run gives back: one result per link, and the files written from them (the
-//! robot with primitive colliders as URDF and MJCF, cuRobo's spheres, a volumes document per
-//! link), with a manifest written last that says they are all there.
+//! robot with primitive colliders as URDF and MJCF, the colliders as USD, cuRobo's spheres, a
+//! volumes document per link), with a manifest written last that says they are all there.
 use std::path::{Path, PathBuf};
 
 use bvseg_core::Segmentation;
@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::model::{Robot, Source};
 use super::paths::{file_safe, relative};
-use super::{curobo, mjcf, urdf};
+use super::{curobo, mjcf, urdf, usd};
 use crate::IoError;
 
 /// The file [`RobotRun::write`] writes last, once every other output is in place (each
@@ -49,7 +49,7 @@ impl RobotRun {
     /// Every output for the directory `dir`, as a path relative to it and its bytes, in
     /// writing order: `links/<link>.json` for each segmented link, `<stem>.urdf`,
     /// `<stem>.xml` (for an MJCF input, then the files it includes, under their own names),
-    /// `curobo.yml`, and [`DONE_FILE`] last. `dir` matters for an MJCF input only, whose
+    /// `<stem>.usda`, `curobo.yml`, and [`DONE_FILE`] last. `dir` matters for an MJCF input only, whose
     /// relative asset directories are made to lead from `dir` back to the input's.
     pub fn files(&self, dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
         let parts: Vec<Option<&Segmentation>> = self
@@ -69,6 +69,7 @@ impl RobotRun {
             }
         }
         let (urdf_name, xml_name) = (format!("{}.urdf", self.stem), format!("{}.xml", self.stem));
+        let usd_name = format!("{}.usda", self.stem);
         files.push((
             PathBuf::from(&urdf_name),
             urdf::to_urdf(&self.robot, &parts, self.urdf_capsules).into_bytes(),
@@ -81,6 +82,7 @@ impl RobotRun {
                 };
                 let taken = [
                     urdf_name,
+                    usd_name.clone(),
                     "curobo.yml".to_owned(),
                     DONE_FILE.to_owned(),
                     "links".to_owned(),
@@ -96,6 +98,10 @@ impl RobotRun {
                 mjcf::to_mjcf_robot(&self.robot, &parts).into_bytes(),
             )),
         }
+        files.push((
+            PathBuf::from(usd_name),
+            usd::to_usda_robot(&self.robot, &parts).into_bytes(),
+        ));
         files.push((
             PathBuf::from("curobo.yml"),
             curobo::to_curobo(&self.robot, &spheres).into_bytes(),
