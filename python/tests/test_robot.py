@@ -32,7 +32,7 @@ def test_the_same_files_as_the_cli(tmp_path, run_cli, arm):
     cli = sorted(str(p.relative_to(tmp_path / "cli")) for p in (tmp_path / "cli").rglob("*") if p.is_file())
     py = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     assert cli == py == [
-        "arm_bodies.xml", "bvseg_arm.urdf", "bvseg_arm.xml", "curobo.yml",
+        "arm_bodies.xml", "bvseg_arm.urdf", "bvseg_arm.usda", "bvseg_arm.xml", "curobo.yml",
         "links/base.json", "links/finger.json", "links/lower.json", "links/upper.json",
         "manifest.json",
     ]

@@ -132,6 +132,26 @@ fn a_robot_gets_primitive_colliders_per_link() {
     let curobo = fs::read_to_string(dir.join("out/curobo.yml")).unwrap();
     assert!(curobo.contains("collision_spheres") && curobo.contains("self_collision_ignore"));
     assert!(dir.join("out/two.xml").is_file());
+    // USD: one Xform per link at its world pose with the joint at zero, the link's colliders
+    // under it in its frame.
+    let usd = fs::read_to_string(dir.join("out/two.usda")).unwrap();
+    assert!(usd.contains("defaultPrim = \"two\"") && usd.contains("upAxis = \"Z\""));
+    let arm = &usd[usd.find("def Xform \"arm\"").unwrap()..];
+    assert!(
+        arm.contains("double3 xformOp:translate = (0, 0, 1)"),
+        "{arm}"
+    );
+    let colliders = usd.matches("PhysicsCollisionAPI").count();
+    let parts: usize = ["base", "arm"]
+        .iter()
+        .map(|l| {
+            bvseg_io::read_volumes(dir.join(format!("out/links/{l}.json")))
+                .unwrap()
+                .volumes
+                .len()
+        })
+        .sum();
+    assert_eq!(colliders, parts);
 }
 
 /// An MJCF robot of one body whose collision mesh is `mesh`, including `include` (a file
@@ -270,6 +290,7 @@ fn the_bundled_mjcf_arm() {
         [
             "arm_bodies.xml",
             "bvseg_arm.urdf",
+            "bvseg_arm.usda",
             "bvseg_arm.xml",
             "curobo.yml",
             "links",
@@ -369,6 +390,7 @@ fn an_mjcf_robot_comes_back_as_written_with_primitive_colliders() {
             "links",
             "manifest.json",
             "saved.urdf",
+            "saved.usda",
             "saved.xml"
         ]
     );
@@ -610,6 +632,7 @@ fn batch_runs_robots_one_directory_each() {
             "links",
             "manifest.json",
             "two.urdf",
+            "two.usda",
             "two.xml"
         ]
     );
@@ -620,6 +643,7 @@ fn batch_runs_robots_one_directory_each() {
             "links",
             "manifest.json",
             "one.urdf",
+            "one.usda",
             "one.xml"
         ]
     );

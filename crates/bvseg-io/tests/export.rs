@@ -363,7 +363,8 @@ fn write_output_picks_the_format_and_refuses_others() {
     let e = write_output(dir.join("a.ply"), &seg, &ExportOptions::default()).unwrap_err();
     assert!(
         e.to_string().ends_with(
-            "unsupported output format '.ply' (supported: .json, .glb, .xml (MJCF), .obj)"
+            "unsupported output format '.ply' (supported: .json, .glb, .xml (MJCF), .obj, \
+             .usda)"
         ),
         "{e}"
     );
