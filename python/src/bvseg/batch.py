@@ -2,7 +2,7 @@
 Data pipeline.
 
     python -m bvseg.batch IN_DIR OUT_DIR [--engine local|ray] [--glob PATTERN]
-        [--formats json,glb,xml,obj] [--force] [--workers N | --concurrency N]
+        [--formats json,glb,xml,obj,usda] [--force] [--workers N | --concurrency N]
         [segment options: --k --tov --max-protrusion ... as ``bvseg batch``]
         [robot options: --source --max-parts --total-parts --spheres-per-link --urdf-capsules]
 
@@ -46,7 +46,7 @@ from . import _worker
 from ._worker import COLUMNS
 
 #: The output formats, by extension, as ``bvseg batch --formats``.
-FORMATS = ("json", "glb", "xml", "obj")
+FORMATS = ("json", "glb", "xml", "obj", "usda")
 
 #: The keyword arguments of :func:`bvseg.robot` beside :func:`bvseg.segment`'s.
 ROBOT_OPTIONS = ("source", "max_parts", "total_parts", "spheres_per_link", "urdf_capsules")
@@ -448,7 +448,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("out_dir", metavar="OUT_DIR", help="directory (or URI) for the outputs and summary.csv")
     p.add_argument("--engine", choices=("local", "ray"), default="local", help="a local process pool (default) or a Ray Data pipeline")
     p.add_argument("--glob", metavar="PATTERN", help="select the files this matches (e.g. '**/*.obj'); default: every .obj, .gltf, .glb, .stl")
-    p.add_argument("--formats", default="json", metavar="EXT,...", help="output formats: json, glb, xml (MJCF), obj (default: json)")
+    p.add_argument("--formats", default="json", metavar="EXT,...", help="output formats: json, glb, xml (MJCF), obj, usda (default: json)")
     p.add_argument("--force", action="store_true", help="redo meshes whose outputs already exist")
     p.add_argument("--workers", type=int, metavar="N", help="local engine: processes (default: one per core)")
     p.add_argument("--concurrency", type=int, metavar="N", help="ray engine: most tasks at once (default: as the cluster's CPUs allow)")
