@@ -364,7 +364,7 @@ fn float3(v: DVec3, round: fn(f64) -> f32) -> String {
 fn f32_up(x: f64) -> f32 {
     let f = x as f32;
     if f64::from(f) < x {
-        f.next_up()
+        next_up(f)
     } else {
         f
     }
@@ -374,9 +374,20 @@ fn f32_up(x: f64) -> f32 {
 fn f32_down(x: f64) -> f32 {
     let f = x as f32;
     if f64::from(f) > x {
-        f.next_down()
+        -next_up(-f)
     } else {
         f
+    }
+}
+
+/// The least `f32` above a finite `f` (`f32::next_up`, which the MSRV, 1.85, lacks).
+fn next_up(f: f32) -> f32 {
+    if f == 0.0 {
+        f32::from_bits(1)
+    } else if f > 0.0 {
+        f32::from_bits(f.to_bits() + 1)
+    } else {
+        f32::from_bits(f.to_bits() - 1)
     }
 }
 
@@ -434,6 +445,12 @@ mod tests {
         assert!(f32_up(x) > f32_down(x));
         assert_eq!(f32_up(0.5), 0.5);
         assert_eq!(f32_down(-0.5), -0.5);
+        for x in [1.0f32, -1.0, 0.0, 3.5e-40, -2.0e30] {
+            let up = next_up(x);
+            assert!(up > x && f32::from_bits(up.to_bits()) == up, "{x}");
+            assert!(-next_up(-x) < x, "{x}");
+        }
+        assert_eq!(next_up(1.0), 1.0 + f32::EPSILON);
     }
 
     #[test]
