@@ -387,3 +387,81 @@ fn a_character_gets_a_skinned_glb_and_a_ragdoll() {
     assert_eq!(xml.matches("<freejoint").count(), 1);
     assert!(xml.contains("type=\"ball\""));
 }
+
+#[test]
+fn usd_output_takes_its_options_in_segment_and_batch() {
+    let dir = scratch("usd_output_takes_its_options");
+    let o = bvseg(
+        &dir,
+        &[
+            "segment",
+            BUNNY,
+            "--samples",
+            "2000",
+            "--k",
+            "5",
+            "-o",
+            "c.json",
+            "-o",
+            "c.usda",
+            "--up-axis",
+            "Z",
+            "--meters-per-unit",
+            "0.01",
+            "--usd-rigid-body",
+            "-q",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = fs::read_to_string(dir.join("c.usda")).unwrap();
+    assert!(text.starts_with("#usda 1.0\n"));
+    for needle in [
+        "defaultPrim = \"c\"",
+        "upAxis = \"Z\"",
+        "metersPerUnit = 0.01",
+        "def Xform \"c\" (\n    prepend apiSchemas = [\"PhysicsRigidBodyAPI\"]",
+    ] {
+        assert!(text.contains(needle), "{needle} not in\n{text}");
+    }
+    let doc: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("c.json")).unwrap()).unwrap();
+    let volumes = doc["volumes"].as_array().unwrap().len();
+    assert_eq!(text.matches("\"PhysicsCollisionAPI\"").count(), volumes);
+
+    // Bad values are usage errors, before any run.
+    for (flag, value) in [
+        ("--up-axis", "X"),
+        ("--meters-per-unit", "0"),
+        ("--meters-per-unit", "-1"),
+    ] {
+        let o = bvseg(&dir, &["segment", BUNNY, flag, value, "-o", "d.usda"]);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}");
+        assert!(!dir.join("d.usda").exists());
+    }
+
+    // batch writes it through the same writer, with the same options.
+    fs::create_dir_all(dir.join("in")).unwrap();
+    fs::copy(BUNNY, dir.join("in/bunny.obj")).unwrap();
+    let o = bvseg(
+        &dir,
+        &[
+            "batch",
+            "in",
+            "-o",
+            "out",
+            "--formats",
+            "json,usda",
+            "--k",
+            "4",
+            "--samples",
+            "2000",
+            "--up-axis",
+            "Z",
+            "-q",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let batch = fs::read_to_string(dir.join("out/bunny.usda")).unwrap();
+    assert!(batch.contains("defaultPrim = \"bunny\"") && batch.contains("upAxis = \"Z\""));
+    assert_eq!(batch.matches("\"PhysicsCollisionAPI\"").count(), 4);
+}
