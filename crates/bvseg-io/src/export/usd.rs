@@ -157,6 +157,103 @@ pub(crate) fn open_xform(s: &mut String, depth: usize, name: &str, t: DVec3, q: 
     );
 }
 
+/// What a collider prim is made of: its type, API schemas, attribute lines, extent in its
+/// own frame, and the xform ops after `translate` (the volume's centre).
+struct PrimSpec {
+    kind: &'static str,
+    schemas: &'static [&'static str],
+    attrs: Vec<String>,
+    extent: (DVec3, DVec3),
+    /// Rotated by the volume's frame (`orient`).
+    orient: bool,
+    /// Scaled (`scale`): only a cube, by its half-extents.
+    scale: Option<DVec3>,
+}
+
+const COLLISION: &[&str] = &["PhysicsCollisionAPI"];
+const MESH_COLLISION: &[&str] = &["PhysicsCollisionAPI", "PhysicsMeshCollisionAPI"];
+
+impl PrimSpec {
+    fn of(v: &BoundingVolume) -> Self {
+        let symmetric = |half: DVec3| (-half, half);
+        match v.view() {
+            ShapeView::Obb { half_extents, .. } => Self {
+                kind: "Cube",
+                schemas: COLLISION,
+                attrs: vec!["double size = 2".to_owned()],
+                extent: symmetric(DVec3::ONE),
+                orient: true,
+                scale: Some(half_extents),
+            },
+            ShapeView::Sphere { radius, .. } => Self::sphere(radius),
+            // A capsule as short as a ball is one.
+            ShapeView::Capsule {
+                half_length,
+                radius,
+                ..
+            } if half_length <= 0.0 => Self::sphere(radius),
+            ShapeView::Capsule {
+                half_length,
+                radius,
+                ..
+            } => Self {
+                kind: "Capsule",
+                schemas: COLLISION,
+                attrs: axial(half_length, radius),
+                extent: symmetric(DVec3::new(radius, radius, half_length + radius)),
+                orient: true,
+                scale: None,
+            },
+            ShapeView::Cylinder {
+                half_length,
+                radius,
+                ..
+            } => Self {
+                kind: "Cylinder",
+                schemas: COLLISION,
+                attrs: axial(half_length, radius),
+                extent: symmetric(DVec3::new(radius, radius, half_length)),
+                orient: true,
+                scale: None,
+            },
+            // The hull's points around its centre, in world axes.
+            ShapeView::Hull { .. } => {
+                let (points, triangles) = hull_vertices(v);
+                Self::convex_mesh(&points, &triangles, false)
+            }
+            // The cover of the unit ball scaled by the radii, in the ellipsoid's frame.
+            ShapeView::Ellipsoid { radii, .. } => {
+                let cover = Polytope::around_unit_ball();
+                let points: Vec<DVec3> = cover.vertices().iter().map(|&p| p * radii).collect();
+                Self::convex_mesh(&points, cover.triangles(), true)
+            }
+        }
+    }
+
+    fn sphere(radius: f64) -> Self {
+        Self {
+            kind: "Sphere",
+            schemas: COLLISION,
+            attrs: vec![format!("double radius = {radius}")],
+            extent: (DVec3::splat(-radius), DVec3::splat(radius)),
+            orient: false,
+            scale: None,
+        }
+    }
+
+    fn convex_mesh(points: &[DVec3], triangles: &[[u32; 3]], orient: bool) -> Self {
+        let (attrs, extent) = convex_mesh(points, triangles);
+        Self {
+            kind: "Mesh",
+            schemas: MESH_COLLISION,
+            attrs,
+            extent,
+            orient,
+            scale: None,
+        }
+    }
+}
+
 /// One volume as a collider prim named `name` at `depth`, with `extra` attribute lines.
 pub(crate) fn collider(
     s: &mut String,
@@ -165,88 +262,31 @@ pub(crate) fn collider(
     name: &str,
     extra: &[String],
 ) {
-    let center = v.center;
-    let rotation = volume_rotation(v);
-    // Kind, schemas, attribute lines, local extent, and whether to orient and scale.
-    let collision: &[&str] = &["PhysicsCollisionAPI"];
-    let mesh_collision: &[&str] = &["PhysicsCollisionAPI", "PhysicsMeshCollisionAPI"];
-    let (kind, schemas, attrs, (lo, hi), orient, scale) = match v.view() {
-        ShapeView::Obb { half_extents, .. } => (
-            "Cube",
-            collision,
-            vec!["double size = 2".to_owned()],
-            (DVec3::NEG_ONE, DVec3::ONE),
-            true,
-            Some(half_extents),
-        ),
-        ShapeView::Sphere { radius, .. } => sphere(radius),
-        // A capsule as short as a ball is one.
-        ShapeView::Capsule {
-            half_length,
-            radius,
-            ..
-        } if half_length <= 0.0 => sphere(radius),
-        ShapeView::Capsule {
-            half_length,
-            radius,
-            ..
-        } => (
-            "Capsule",
-            collision,
-            axial(half_length, radius),
-            (
-                -DVec3::new(radius, radius, half_length + radius),
-                DVec3::new(radius, radius, half_length + radius),
-            ),
-            true,
-            None,
-        ),
-        ShapeView::Cylinder {
-            half_length,
-            radius,
-            ..
-        } => (
-            "Cylinder",
-            collision,
-            axial(half_length, radius),
-            (
-                -DVec3::new(radius, radius, half_length),
-                DVec3::new(radius, radius, half_length),
-            ),
-            true,
-            None,
-        ),
-        ShapeView::Hull { .. } => {
-            let (points, triangles) = hull_vertices(v);
-            let (attrs, extent) = convex_mesh(&points, &triangles);
-            ("Mesh", mesh_collision, attrs, extent, false, None)
-        }
-        ShapeView::Ellipsoid { radii, .. } => {
-            let cover = Polytope::around_unit_ball();
-            let points: Vec<DVec3> = cover.vertices().iter().map(|&p| p * radii).collect();
-            let (attrs, extent) = convex_mesh(&points, cover.triangles());
-            ("Mesh", mesh_collision, attrs, extent, true, None)
-        }
-    };
-    open_prim(s, depth, kind, name, schemas);
+    let spec = PrimSpec::of(v);
+    open_prim(s, depth, spec.kind, name, spec.schemas);
     let pad = "    ".repeat(depth + 1);
+    let (lo, hi) = spec.extent;
     let _ = writeln!(
         s,
         "{pad}float3[] extent = [{}, {}]",
         float3(lo, f32_down),
         float3(hi, f32_up)
     );
-    for a in attrs.iter().chain(extra) {
+    for a in spec.attrs.iter().chain(extra) {
         let _ = writeln!(s, "{pad}{a}");
     }
     let _ = writeln!(s, "{pad}uniform token purpose = \"guide\"");
     let mut order = vec!["\"xformOp:translate\""];
-    let _ = writeln!(s, "{pad}double3 xformOp:translate = {}", double3(center));
-    if orient {
-        let _ = writeln!(s, "{pad}quatd xformOp:orient = {}", quat(rotation));
+    let _ = writeln!(s, "{pad}double3 xformOp:translate = {}", double3(v.center));
+    if spec.orient {
+        let _ = writeln!(
+            s,
+            "{pad}quatd xformOp:orient = {}",
+            quat(volume_rotation(v))
+        );
         order.push("\"xformOp:orient\"");
     }
-    if let Some(k) = scale {
+    if let Some(k) = spec.scale {
         let _ = writeln!(s, "{pad}double3 xformOp:scale = {}", double3(k));
         order.push("\"xformOp:scale\"");
     }
@@ -256,28 +296,6 @@ pub(crate) fn collider(
         order.join(", ")
     );
     close_prim(s, depth);
-}
-
-/// A sphere's kind, attributes and extent for [`collider`].
-#[allow(clippy::type_complexity)]
-fn sphere(
-    radius: f64,
-) -> (
-    &'static str,
-    &'static [&'static str],
-    Vec<String>,
-    (DVec3, DVec3),
-    bool,
-    Option<DVec3>,
-) {
-    (
-        "Sphere",
-        &["PhysicsCollisionAPI"],
-        vec![format!("double radius = {radius}")],
-        (DVec3::splat(-radius), DVec3::splat(radius)),
-        false,
-        None,
-    )
 }
 
 /// A capsule's or cylinder's attributes: along Z, `height` twice the half-length (without
