@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Checks bvseg's USD outputs with Pixar's usd-core (PyPI), as Isaac Sim and Omniverse read them:
 # - bvseg segment writes .usda (and .json) for two bundled meshes at the defaults (ellipsoids
-#   become convex meshes) and with --target usd-hull, and for the bundled CesiumMan (volumes
-#   named by their bones); bvseg robot writes the bundled arm6's <robot>.usda.
+#   become convex meshes) and with --target usd and usd-hull, and for the bundled CesiumMan
+#   (volumes named by their bones); bvseg robot writes the bundled arm6's <robot>.usda.
 # - scripts/check_usd.py opens each with Usd.Stage.Open and checks the stage metadata, that
 #   every collider prim has UsdPhysics.CollisionAPI, a guide purpose, no non-uniform scale on
 #   a Sphere, Capsule or Cylinder, at most 64 points on a convex Mesh, and one collider per
@@ -71,6 +71,7 @@ for m in bunny spot; do
     segment "${m}_default" "$root/assets/meshes/$m.obj"
     segment "${m}_usd-hull" "$root/assets/meshes/$m.obj" --k 16 --target usd-hull \
         --up-axis Z --meters-per-unit 0.01 --usd-rigid-body
+    segment "${m}_usd" "$root/assets/meshes/$m.obj" --k 16 --target usd
 done
 segment CesiumMan "$root/assets/characters/CesiumMan.glb" --bv capsule
 arm6="$root/assets/robots/arm6/arm6.xml"
