@@ -104,7 +104,7 @@ pub mod internals {
     pub use crate::partition::{Partition, Solid};
     pub use crate::rng::Rng;
     pub use crate::sampling::{inside::inside_cells, Grid, NONE};
-    /// The count of work done (see `tests/linear_cost.rs`).
+    /// The count of work done on the calling thread (see `tests/linear_cost.rs`).
     pub mod work {
         pub use crate::work::{add, total};
     }

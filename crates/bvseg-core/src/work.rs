@@ -3,17 +3,24 @@
 //! does. Each stage whose cost depends on the input adds what it processed (lattice columns
 //! scanned, points fitted, cells counted, vertices welded and triangles checked). Not part
 //! of the API.
-use std::sync::atomic::{AtomicU64, Ordering};
+//!
+//! The count is per thread, so that work done by other threads (another test of the same
+//! binary, say) never adds to it. To count a whole run, run it on one thread: with the
+//! `parallel` feature, in a one-thread rayon pool that uses the calling thread
+//! (`ThreadPoolBuilder::new().num_threads(1).use_current_thread()`).
+use std::cell::Cell;
 
-static UNITS: AtomicU64 = AtomicU64::new(0);
-
-/// Counts `n` more units of work.
-#[inline]
-pub fn add(n: usize) {
-    UNITS.fetch_add(n as u64, Ordering::Relaxed);
+thread_local! {
+    static UNITS: Cell<u64> = const { Cell::new(0) };
 }
 
-/// The units counted in this process so far.
+/// Counts `n` more units of work on this thread.
+#[inline]
+pub fn add(n: usize) {
+    UNITS.with(|u| u.set(u.get() + n as u64));
+}
+
+/// The units counted on this thread so far.
 pub fn total() -> u64 {
-    UNITS.load(Ordering::Relaxed)
+    UNITS.with(Cell::get)
 }
