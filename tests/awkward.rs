@@ -35,8 +35,36 @@ fn run(name: &str, mesh: &Mesh, params: &Params) -> (Segmentation, VerifyReport)
         "{name}: interior coverage {}",
         r.coverage_interior
     );
-    for p in &seg.parts {
-        assert!(p.volume.radii.is_finite() && p.volume.center.is_finite());
+    // Every corner of every triangle lies in its part's volume by the core's own test too,
+    // k is the one asked for or within 1..=max_k, and the tolerances reported met or unmet
+    // are the run's, judged on the reported figures.
+    for (t, &part) in seg.triangle_parts.iter().enumerate() {
+        let v = &seg.parts[part as usize].volume;
+        for c in mesh.corners(t) {
+            assert!(v.contains(c), "{name}: corner {c} of triangle {t} escapes");
+        }
+    }
+    let k = seg.parts.len();
+    assert_eq!(seg.metrics.k, k, "{name}");
+    match params.k {
+        Some(asked) => assert_eq!(k, asked, "{name}"),
+        None => assert!((1..=params.max_k).contains(&k), "{name}: k = {k}"),
+    }
+    let m = &seg.metrics;
+    let limit = params.protrusion_tolerance(m.diagonal);
+    let unmet = seg.unmet(params);
+    if params.k.is_some() {
+        assert_eq!(seg.tolerances_met(params), None, "{name}");
+        assert!(unmet.is_empty(), "{name}");
+    } else {
+        let met = m.tov < params.tov && m.protrusion < limit;
+        assert_eq!(seg.tolerances_met(params), Some(met), "{name}");
+        let expected: Vec<(f64, f64)> = [(m.tov, params.tov), (m.protrusion, limit)]
+            .into_iter()
+            .filter(|&(value, limit)| value >= limit)
+            .collect();
+        let reported: Vec<(f64, f64)> = unmet.iter().map(|u| (u.value, u.limit)).collect();
+        assert_eq!(reported, expected, "{name}: unmet tolerances");
     }
     eprintln!(
         "{name}: k = {}, TOV {:.4} ± {:.4} (own figure {:.4})",
@@ -81,7 +109,11 @@ fn one_cell_thick_plate() {
         r.tov,
         seg.parts.len()
     );
-    assert!(seg.metrics.f.is_finite());
+    // No radius below half a cell: the plate's volumes are not flat.
+    for p in &seg.parts {
+        let r = p.volume.radii.min_element();
+        assert!(r >= 0.5 * seg.cell_size, "plate obb: radius {r}");
+    }
     // With four parts, each part's box must hold the plate's two huge face triangles that
     // are given to it, and no radius goes below half a cell, so a part holding one face and
     // the middle layer of cells is inflated about its centre: measured 0.50. The bound
@@ -229,10 +261,15 @@ fn tiny_and_huge_scales() {
         ),
     ]);
     let p = params(2000, None, Kinds::MIXED);
-    let (_, r1) = run("unit", &base, &p);
+    let (unit, r1) = run("unit", &base, &p);
     for s in [1e-6, 1e6] {
         let (seg, r) = run(&format!("scale {s}"), &scaled(&base, s), &p);
-        assert!(seg.cell_size > 0.0 && seg.cell_size.is_finite());
+        // The lattice scales with the shape.
+        let ratio = seg.cell_size / (s * unit.cell_size);
+        assert!(
+            (ratio - 1.0).abs() < 1e-9,
+            "scale {s}: cell size ratio {ratio}"
+        );
         // The same shape at another scale: TOV comparable to the unit-scale run.
         assert!(
             (r.tov - r1.tov).abs() < 0.15,

@@ -160,39 +160,78 @@ fn parts_are_connected_cover_every_sample_and_enclose_the_mesh() {
     }
 }
 
+/// Tolerance mode splits while a tolerance is unmet, and no longer once they are met; it
+/// stops unmet only at max_k or when splits stop helping (the last ones were undone). The
+/// result reports the final step's figures and judges them by the run's tolerances. Spot at
+/// 8000 samples and max_k = 24: at the defaults it reaches max_k unmet; at TOV 0.5 its
+/// protrusion splits stop helping at k = 21; with the protrusion at 0.1 too it meets both.
 #[test]
 fn auto_mode_stops_only_when_tolerances_are_met_or_k_is_exhausted() {
+    use bvseg::StepKind::{Backtrack, Final, Initial, Merge, Split};
     let mesh = bundled("spot.obj");
-    let params = Params {
-        samples: 8_000,
-        max_k: 24,
-        ..Params::default()
-    };
-    let seg = segment(&mesh, &params).unwrap();
-    let m = seg.metrics;
-    // The refinement ran and reported every step, ending with the final one.
-    assert!(seg.history.len() >= 3);
-    assert_eq!(seg.history.last().map(|s| s.k), Some(m.k));
-    assert!(m.k <= params.max_k && m.tov.is_finite() && m.mov.is_finite());
-    let peak = seg.history.iter().map(|s| s.k).max().unwrap_or(0);
-    let pr_tol = params.max_protrusion * m.diagonal;
-    let met = |s: &bvseg::Step| s.tov < params.tov && s.protrusion < pr_tol;
-    // Either some step met the tolerances, or k reached max_k (or the step guard ran out).
-    assert!(
-        peak == params.max_k || seg.history.iter().any(met),
-        "stopped at k {peak} without meeting the tolerances"
-    );
-    // Merges never break tolerances that were met.
-    for w in seg.history.windows(2) {
-        if w[1].kind == bvseg::StepKind::Merge && met(&w[0]) {
-            assert!(met(&w[1]));
+    let defaults = Params::default();
+    // (TOV, protrusion, whether the result meets them, whether k reaches max_k)
+    for (tov, protrusion, meets, at_max_k) in [
+        (defaults.tov, defaults.max_protrusion, false, true),
+        (0.5, defaults.max_protrusion, false, false),
+        (0.5, 0.1, true, false),
+    ] {
+        let params = Params {
+            samples: 8_000,
+            max_k: 24,
+            tov,
+            max_protrusion: protrusion,
+            ..Params::default()
+        };
+        let what = format!("TOV {tov}, protrusion {protrusion}");
+        let seg = segment(&mesh, &params).unwrap();
+        let m = seg.metrics;
+        let h = &seg.history;
+        // The refinement ran and reported every step, from the start to the final volumes,
+        // whose figures are the result's.
+        assert!(h.len() >= 3, "{what}: {} steps", h.len());
+        assert_eq!(h[0].kind, Initial);
+        let last = h[h.len() - 1];
+        assert_eq!(last.kind, Final);
+        assert_eq!((last.k, last.tov, last.mov), (m.k, m.tov, m.mov));
+        assert_eq!(last.protrusion, m.protrusion);
+        assert_eq!(seg.parts.len(), m.k);
+        assert!(h.iter().all(|s| (1..=params.max_k).contains(&s.k)));
+        let pr_tol = params.max_protrusion * m.diagonal;
+        let met = |s: &bvseg::Step| s.tov < params.tov && s.protrusion < pr_tol;
+        // No split once a step has met the tolerances.
+        if let Some(first) = h.iter().position(met) {
+            assert!(
+                h[first + 1..].iter().all(|s| s.kind != Split),
+                "{what}: a split after step {first} met the tolerances"
+            );
         }
+        // The result meets them, or k reached max_k, or the last splits were undone.
+        let final_met = met(&last);
+        let peak = h.iter().map(|s| s.k).max().unwrap_or(0);
+        assert_eq!(
+            (final_met, peak == params.max_k),
+            (meets, at_max_k),
+            "{what}: {m:?}"
+        );
+        let gave_up = h
+            .iter()
+            .rfind(|s| matches!(s.kind, Split | Backtrack))
+            .is_some_and(|s| s.kind == Backtrack);
+        assert!(
+            final_met || peak == params.max_k || gave_up,
+            "{what}: stopped at k {peak} without meeting the tolerances"
+        );
+        // Merges never break tolerances that were met.
+        for w in h.windows(2) {
+            if w[1].kind == Merge && met(&w[0]) {
+                assert!(met(&w[1]), "{what}");
+            }
+        }
+        // The report's rule is the same, by the run's tolerances.
+        assert_eq!(seg.tolerances_met(&params), Some(final_met));
+        assert_eq!(seg.unmet(&params).is_empty(), final_met);
     }
-    // The report's rule agrees with the history's last step.
-    assert_eq!(
-        seg.tolerances_met(&params),
-        Some(met(&seg.history[seg.history.len() - 1]))
-    );
 }
 
 /// Adaptive sampling: weighted blocks fill the thick inside, and every promise of the regular
