@@ -2,7 +2,7 @@
 //! points, the MVEE of that hull, and the two together as `Fitter` does them.
 //!
 //! The parts come from the pipeline's own first stages on real meshes (the bunny, and the
-//! shared `human_1` when it is there): a 20k-sample grid, a 16-part CVT, Lloyd + polish, then
+//! shared `human_1` when it is there): a 20k-sample grid, a 16-part CVT, Lloyd + boundary moves, then
 //! each part's enclosure points (boundary samples, shared cell-face centres and mesh vertices).
 //! Each benchmark fits every part once per iteration; the throughput line gives fits per
 //! second, and the per-fit time is the iteration time divided by the part count printed

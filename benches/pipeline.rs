@@ -7,7 +7,7 @@
 //! | id | what is timed | bar (2 cores) |
 //! |---|---|---|
 //! | `sampling/bunny_20k` | `Grid::from_mesh` alone | - |
-//! | `optimize/k20_n15000` | `optimize` (Lloyd + polish) from a CVT start, k = 20 | <= 30 ms |
+//! | `optimize/k20_n15000` | `optimize` (Lloyd + boundary moves) from a CVT start, k = 20 | <= 30 ms |
 //! | `pipeline/auto_bunny_20k`, `pipeline/auto_<mesh>` | `segment` with `Params::default()` | <= 0.5 s near 30 parts |
 //! | `assign/threads_{1,2}` | one assignment sweep, 100k samples x 32 parts | speedup >= 1.6x |
 //! | `scaling_n/{10k,100k,1M}` | `segment`, bunny, k = 16 | - |
@@ -113,7 +113,7 @@ fn bench_optimize(c: &mut Criterion) {
             let mut probe = p.part.clone();
             let st = optimize(&p.solid, &mut probe, None, None, 100);
             eprintln!(
-                "optimize/k20_n15000: mesh {name}, {} samples, k {}, {} sweeps, {} polish moves, F {:.4} -> {:.4}",
+                "optimize/k20_n15000: mesh {name}, {} samples, k {}, {} sweeps, {} boundary moves, F {:.4} -> {:.4}",
                 p.solid.len(),
                 p.part.k(),
                 st.sweeps,

@@ -27,7 +27,7 @@ pub struct Given<'py> {
     pub samples: Option<Bound<'py, PyAny>>,
     pub seed: Option<Bound<'py, PyAny>>,
     pub merge: bool,
-    pub polish: bool,
+    pub tighten: bool,
     pub hierarchy: bool,
     pub margin: Option<f64>,
     pub threads: Option<Bound<'py, PyAny>>,
@@ -135,7 +135,7 @@ pub const NAMES: [&str; 19] = [
     "seed",
     "threads",
     "merge",
-    "polish",
+    "tighten",
     "hierarchy",
     "margin",
     "timeout",
@@ -178,7 +178,7 @@ impl<'py> Given<'py> {
     pub fn from_kwargs(function: &str, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
         let mut g = Given {
             merge: true,
-            polish: true,
+            tighten: true,
             hierarchy: true,
             ..Given::default()
         };
@@ -188,7 +188,8 @@ impl<'py> Given<'py> {
         for (key, value) in kwargs.iter() {
             let key: String = key.extract()?;
             if value.is_none() {
-                if !NAMES.contains(&key.as_str()) {
+                // `polish` is the former name of `tighten`.
+                if !NAMES.contains(&key.as_str()) && key != "polish" {
                     return Err(unknown(function, &key));
                 }
                 continue;
@@ -221,7 +222,8 @@ impl<'py> Given<'py> {
                 "seed" => g.seed = v,
                 "threads" => g.threads = v,
                 "merge" => g.merge = boolean(&key, &value)?,
-                "polish" => g.polish = boolean(&key, &value)?,
+                // `polish` is the former name of `tighten`.
+                "tighten" | "polish" => g.tighten = boolean(&key, &value)?,
                 "hierarchy" => g.hierarchy = boolean(&key, &value)?,
                 "margin" => g.margin = Some(float(&key, &value)?),
                 "timeout" => g.timeout = Some(float(&key, &value)?),
@@ -294,7 +296,7 @@ impl<'py> Given<'py> {
             max_protrusion_abs: self.max_protrusion_abs,
             max_k: opt_size("max_k", &self.max_k)?.unwrap_or(d.max_k),
             merge: self.merge,
-            polish: self.polish,
+            tighten: self.tighten,
             hierarchy: self.hierarchy,
             margin: self.margin.unwrap_or(d.margin),
             skeleton: match &self.skeleton {
@@ -381,7 +383,7 @@ pub fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("seed", d.seed)?;
     out.set_item("threads", py.None())?;
     out.set_item("merge", d.merge)?;
-    out.set_item("polish", d.polish)?;
+    out.set_item("tighten", d.tighten)?;
     out.set_item("hierarchy", d.hierarchy)?;
     out.set_item("margin", d.margin)?;
     out.set_item("timeout", py.None())?;

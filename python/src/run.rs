@@ -358,7 +358,7 @@ impl PySegmentation {
         d.set_item("samples", p.samples)?;
         d.set_item("seed", p.seed)?;
         d.set_item("merge", p.merge)?;
-        d.set_item("polish", p.polish)?;
+        d.set_item("tighten", p.tighten)?;
         d.set_item("margin", p.margin)?;
         Ok(d)
     }

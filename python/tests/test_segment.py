@@ -75,8 +75,8 @@ def test_tolerance_mode_defaults_are_the_clis(tmp_path, run_cli):
          dict(target="parry-hull", k=6, max_hull_vertices=16)),
         (["--tov", "0.5", "--max-protrusion", "0.1", "--seed", "3", "--no-merge"],
          dict(tov=0.5, max_protrusion=0.1, seed=3, merge=False)),
-        (["--max-protrusion-abs", "1.5", "--mov", "2.0", "--max-k", "10", "--no-polish", "--margin", "0.01"],
-         dict(max_protrusion_abs=1.5, mov=2.0, max_k=10, polish=False, margin=0.01)),
+        (["--max-protrusion-abs", "1.5", "--mov", "2.0", "--max-k", "10", "--no-tighten", "--margin", "0.01"],
+         dict(max_protrusion_abs=1.5, mov=2.0, max_k=10, tighten=False, margin=0.01)),
         (["--sampling", "adaptive", "--skeleton", "auto", "--max-k", "12"],
          dict(sampling="adaptive", skeleton="auto", max_k=12)),
     ],
@@ -182,9 +182,9 @@ def test_defaults_are_the_cores(run_cli):
     d = bvseg.DEFAULTS
     assert (d["tov"], d["max_protrusion"], d["max_k"], d["samples"], d["seed"]) == (0.3, 0.05, 96, 20000, 0)
     assert d["kinds"] == "ellipsoid,obb,sphere,capsule,cylinder" and d["max_hull_vertices"] == 32
-    assert d["k"] is None and d["mov"] is None and d["merge"] and d["polish"] and d["margin"] == 0
+    assert d["k"] is None and d["mov"] is None and d["merge"] and d["tighten"] and d["margin"] == 0
     assert d["hierarchy"] is True
-    assert d["skeleton"] == "skin" and d["sampling"] == "regular"
+    assert d["skeleton"] == "rig" and d["sampling"] == "regular"
     # The CLI's --help shows the same defaults.
     help_text = run_cli("segment", "--help").stdout
     assert "[default: 0.3]" in help_text and "[default: 20000]" in help_text and "[default: 96]" in help_text

@@ -94,6 +94,7 @@ pub fn run(args: &BatchArgs) -> anyhow::Result<ExitCode> {
             formats.push(format);
         }
     }
+    args.params.no_skeleton_file("batch")?;
     let params = args.params.params(&formats)?;
     // A robot's links always get a JSON document, the format that carries the hierarchy.
     let robot_options = args

@@ -150,9 +150,11 @@ pub struct ParamArgs {
     #[arg(long)]
     pub no_merge: bool,
 
-    /// Do not polish part boundaries nor reshape the ellipsoids to lower the outside volume.
-    #[arg(long)]
-    pub no_polish: bool,
+    /// Do not tighten: no moves of boundary layers between parts to lower the outside volume
+    /// (during refinement and before the final step) and no reshaping or change of kind of
+    /// the output volumes. The moves that lower F while the parts are optimised still run.
+    #[arg(long, alias = "no-polish")]
+    pub no_tighten: bool,
 
     /// JSON output: leave the bounding-volume hierarchy empty instead of building it (about a
     /// sixth of a default run's time).
@@ -168,13 +170,14 @@ pub struct ParamArgs {
     #[arg(long, value_name = "D", default_value_t = Params::default().margin)]
     pub margin: f64,
 
-    /// Where the first parts are seeded from (the paper's section 6.1): `skin` (the default)
-    /// uses a skinned glTF's skeleton when the file has one, `auto` computes an approximate
-    /// curve skeleton, `none` grows parts from one, and a path reads a `bvseg.skeleton/1`
-    /// file (docs/formats.md) for an unskinned mesh. A skinned mesh's volumes follow its
-    /// animation whichever start is chosen.
-    #[arg(long, value_name = "skin|auto|none|FILE", default_value = "skin")]
-    pub skeleton: String,
+    /// Where the first parts are seeded from (the paper's section 6.1): `rig` (the default)
+    /// uses the mesh's own skeleton when it has one (a skinned glTF's), `auto` computes an
+    /// approximate curve skeleton, `none` grows parts from one, and any other value is the
+    /// path of a `bvseg.skeleton/1` file (docs/formats.md) for an unskinned mesh, used as its
+    /// own (`segment` only; write `./auto` for a file named `auto`). A skinned mesh's volumes
+    /// follow its animation whichever start is chosen.
+    #[arg(long, value_name = "rig|auto|none|FILE", default_value = "rig", value_parser = parse_skeleton)]
+    pub skeleton: SkeletonArg,
 
     /// How the inside is sampled (the paper's section 6.2): `regular`, one sample per cell of
     /// a lattice, or `adaptive`, a finer lattice whose thick inside is gathered into weighted
@@ -185,6 +188,35 @@ pub struct ParamArgs {
     /// Give up after this many seconds of segmentation: exit 2, write nothing.
     #[arg(long, value_name = "SECONDS", value_parser = parse_timeout)]
     pub timeout: Option<f64>,
+}
+
+/// A `--skeleton` value: a start mode, or a skeleton file to attach to the mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SkeletonArg {
+    /// `rig` (or `skin`, its former name), `auto` or `none`.
+    Mode(SkeletonMode),
+    /// A `bvseg.skeleton/1` file, attached to the mesh as its rig (the start is then
+    /// [`SkeletonMode::Rig`]).
+    Path(PathBuf),
+}
+
+impl SkeletonArg {
+    /// The start mode the core runs with: a file's skeleton is the mesh's own once attached.
+    pub fn mode(&self) -> SkeletonMode {
+        match self {
+            Self::Mode(m) => *m,
+            Self::Path(_) => SkeletonMode::Rig,
+        }
+    }
+}
+
+/// A `--skeleton` value: a mode name, else a path.
+fn parse_skeleton(s: &str) -> Result<SkeletonArg, String> {
+    if s.is_empty() {
+        return Err("expected rig, auto, none or the path of a skeleton file".into());
+    }
+    Ok(s.parse()
+        .map_or_else(|_| SkeletonArg::Path(s.into()), SkeletonArg::Mode))
 }
 
 /// A positive number of seconds, at most a year.
@@ -214,27 +246,39 @@ fn parse_target(s: &str) -> Result<Kinds, String> {
 }
 
 impl ParamArgs {
-    /// `mesh` with the skeleton `--skeleton FILE` names attached (unchanged for the other
-    /// values).
+    /// `mesh` with the skeleton `--skeleton FILE` names attached (unchanged for a mode).
     pub fn rigged(&self, mesh: &Mesh) -> anyhow::Result<Mesh> {
-        if matches!(self.skeleton.as_str(), "skin" | "auto" | "none") {
+        let SkeletonArg::Path(path) = &self.skeleton else {
             return Ok(mesh.clone());
-        }
+        };
         if mesh.rig().is_some_and(|r| r.skin.is_some()) {
             bail!(
                 "--skeleton {}: the mesh is skinned and uses its own skin's skeleton; \
-                 a skeleton file is for unskinned meshes (use --skeleton skin, auto or none)",
-                self.skeleton
+                 a skeleton file is for unskinned meshes (use --skeleton rig, auto or none)",
+                path.display()
             );
         }
-        let skeleton = bvseg_io::read_skeleton(&self.skeleton)?;
+        let skeleton = bvseg_io::read_skeleton(path)?;
         let rig = bvseg_core::Rig {
             skeleton,
             skin: None,
         };
         mesh.clone()
             .with_rig(rig)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", self.skeleton))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    }
+
+    /// An error when `--skeleton` names a file: `command` segments many meshes and attaches
+    /// no skeleton file.
+    pub fn no_skeleton_file(&self, command: &str) -> anyhow::Result<()> {
+        if let SkeletonArg::Path(path) = &self.skeleton {
+            bail!(
+                "--skeleton {}: `bvseg {command}` takes rig, auto or none; a skeleton file is \
+                 for `bvseg segment` on one unskinned mesh",
+                path.display()
+            );
+        }
+        Ok(())
     }
 
     /// The core's parameters, validated, and within `--max-samples`, for a run that writes
@@ -259,12 +303,11 @@ impl ParamArgs {
             max_protrusion_abs: self.max_protrusion_abs,
             max_k: self.max_k,
             merge: !self.no_merge,
-            polish: !self.no_polish,
+            tighten: !self.no_tighten,
             margin: self.margin,
             hierarchy: !self.no_hierarchy && formats.iter().any(|f| f.carries_hierarchy()),
-            // A skeleton file is attached to the mesh (see `with_skeleton_file`) and used as
-            // its own.
-            skeleton: self.skeleton.parse().unwrap_or(SkeletonMode::Rig),
+            // A skeleton file is attached to the mesh (see `rigged`) and used as its own.
+            skeleton: self.skeleton.mode(),
             sampling: self.sampling,
             ..Params::default()
         };

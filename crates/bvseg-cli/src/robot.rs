@@ -95,6 +95,7 @@ pub struct RobotArgs {
 
 pub fn run(args: &RobotArgs) -> anyhow::Result<ExitCode> {
     let start = Instant::now();
+    args.params.no_skeleton_file("robot")?;
     // Each link's volumes go to a JSON document, the one format that carries the hierarchy.
     let options = args
         .budget

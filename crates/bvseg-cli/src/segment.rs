@@ -351,7 +351,7 @@ mod tests {
         let p = &a.params;
         assert_eq!(p.bv, Kinds::MIXED);
         assert_eq!(p.threads, Some(3));
-        assert!(p.no_merge && p.no_polish && a.quiet && p.strict && a.json);
+        assert!(p.no_merge && p.no_tighten && a.quiet && p.strict && a.json);
         assert_eq!((p.samples, p.seed, p.max_k), (5000, 7, 9));
         assert_eq!(a.output.len(), 2);
         assert_eq!(a.input.object.as_deref(), Some("body"));
@@ -379,6 +379,37 @@ mod tests {
             .params
             .params(&[]);
         assert!(few.unwrap_err().to_string().contains("max_hull_vertices"));
+    }
+
+    #[test]
+    fn no_tighten_has_the_former_name_as_an_alias() {
+        for flag in ["--no-tighten", "--no-polish"] {
+            let p = parse(&[flag]).unwrap().params.params(&[]).unwrap();
+            assert!(!p.tighten, "{flag}");
+        }
+        assert!(parse(&[]).unwrap().params.params(&[]).unwrap().tighten);
+    }
+
+    #[test]
+    fn skeleton_is_a_mode_or_a_file() {
+        use crate::common::SkeletonArg;
+        use bvseg_core::SkeletonMode;
+        let skeleton = |args: &[&str]| parse(args).unwrap().params.skeleton;
+        assert_eq!(skeleton(&[]), SkeletonArg::Mode(SkeletonMode::Rig));
+        for (name, mode) in [
+            ("rig", SkeletonMode::Rig),
+            ("skin", SkeletonMode::Rig),
+            ("auto", SkeletonMode::Auto),
+            ("none", SkeletonMode::None),
+        ] {
+            assert_eq!(skeleton(&["--skeleton", name]), SkeletonArg::Mode(mode));
+        }
+        let file = parse(&["--skeleton", "./auto"]).unwrap().params;
+        assert_eq!(file.skeleton, SkeletonArg::Path("./auto".into()));
+        assert_eq!(file.params(&[]).unwrap().skeleton, SkeletonMode::Rig);
+        let e = file.no_skeleton_file("batch").unwrap_err().to_string();
+        assert!(e.contains("`bvseg batch` takes rig, auto or none"), "{e}");
+        assert!(parse(&["--skeleton", ""]).is_err());
     }
 
     #[test]

@@ -85,8 +85,7 @@ pub enum TooComplex {
     },
     /// An allocation failed (noted by the web viewer's allocator, before its worker aborts).
     #[error(
-        "the core ran out of memory (an allocation of {:.1} MB failed); reload the page and try \
-         fewer samples",
+        "the core ran out of memory (an allocation of {:.1} MB failed); try fewer samples",
         *.bytes as f64 / 1e6
     )]
     OutOfMemory {

@@ -100,7 +100,7 @@ pub mod internals {
     pub use crate::initialization::cvt;
     pub use crate::linalg::dense::{cholesky_solve, invert, log_det};
     pub use crate::linalg::sym_eigen;
-    pub use crate::optimization::{lloyd, optimize, polish};
+    pub use crate::optimization::{lloyd, move_boundary_samples, optimize};
     pub use crate::partition::{Partition, Solid};
     pub use crate::rng::Rng;
     pub use crate::sampling::{inside::inside_cells, Grid, NONE};

@@ -23,7 +23,7 @@ pub const MULTIGRID_MIN: usize = 400_000;
 const FINE_SWEEPS: usize = 16;
 
 /// The CVT start of `k` parts (seeded by `seed`) optimised with up to `max_sweeps` Lloyd
-/// sweeps and the boundary polish, on coarser lattices first when `solid` is large.
+/// sweeps and the boundary moves, on coarser lattices first when `solid` is large.
 pub fn initial_partition(solid: &Solid, k: usize, seed: u64, max_sweeps: usize) -> Partition {
     let k = k.min(solid.len());
     if solid.len() < MULTIGRID_MIN {

@@ -3,7 +3,7 @@
 //! 1. Lloyd-like sweeps ([`crate::assignment`] then [`crate::flooding`]): a sweep is kept only
 //!    if the exact F drops. When the paper's rule stops improving, the corrected first-order
 //!    rule (`e (d - 3)`) is tried before giving up: the exact F decides.
-//! 2. Boundary polish: single boundary samples move to a neighbouring part when the exact
+//! 2. Boundary moves ([`move_boundary_samples`]): single boundary samples move to a neighbouring part when the exact
 //!    change of F (from rank-one updated moments) is negative and the move keeps the part it
 //!    leaves connected, until no such move remains.
 use crate::assignment::{assign, assign_local, PartMetric, Rule};
@@ -16,7 +16,7 @@ use crate::sampling::NONE;
 pub struct OptStats {
     /// Lloyd sweeps kept.
     pub sweeps: usize,
-    /// Boundary moves made by the polish.
+    /// Boundary samples moved by [`move_boundary_samples`].
     pub moves: usize,
     /// F before.
     pub f_before: f64,
@@ -28,18 +28,18 @@ pub struct OptStats {
 const MIN_GAIN: f64 = 1e-7;
 
 /// Optimise `part` in place: Lloyd sweeps over the parts `lloyd_parts`, then the boundary
-/// polish over `polish_parts` (`None`: all parts). Only samples of those parts move, and
+/// sample moves over `move_parts` (`None`: all parts). Only samples of those parts move, and
 /// only among them; the refinement uses this to re-optimise locally after a split.
 pub fn optimize(
     solid: &Solid,
     part: &mut Partition,
     lloyd_parts: Option<&[u32]>,
-    polish_parts: Option<&[u32]>,
+    move_parts: Option<&[u32]>,
     max_sweeps: usize,
 ) -> OptStats {
     let f_before = part.f();
     let sweeps = lloyd(solid, part, lloyd_parts, max_sweeps);
-    let moves = polish(solid, part, polish_parts);
+    let moves = move_boundary_samples(solid, part, move_parts);
     OptStats {
         sweeps,
         moves,
@@ -186,7 +186,7 @@ pub fn lloyd(
             prev[s as usize] = NONE;
         }
         last_touched = touched;
-        // Few samples moved: the sweep has converged, the polish finishes the job.
+        // Few samples moved: the sweep has converged, the boundary moves finish the job.
         let converged = accept && (moved as f64) < 1e-3 * samples.len() as f64;
         if converged {
             break;
@@ -418,7 +418,7 @@ fn removable(solid: &Solid, labels: &[u32], s: usize, label: u32) -> bool {
         return true;
     }
     // A flood over the 27 cells, in fixed arrays: this runs for every boundary sample of
-    // every polish, where a heap allocation per call showed in the profile.
+    // every call of `move_boundary_samples`, where a heap allocation per call showed in the profile.
     let mut seen = [false; 27];
     let mut stack = [0usize; 27];
     let mut top = 1;
@@ -521,8 +521,9 @@ fn shell_connected(
     Some(faces.iter().all(|&f| seen[f]))
 }
 
-/// Boundary polish with the exact change of F; returns the number of moves.
-pub fn polish(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> usize {
+/// Moves single boundary samples to a neighbouring part while the exact change of F is
+/// negative and the part left stays connected; returns the number of moves.
+pub fn move_boundary_samples(solid: &Solid, part: &mut Partition, active: Option<&[u32]>) -> usize {
     let k = part.k();
     let mut is_active = vec![active.is_none(); k];
     if let Some(a) = active {

@@ -68,11 +68,15 @@ pub struct Params {
     /// Merge parts at the end of the tolerance loop while that lowers TOV (and keeps met
     /// tolerances met). Default `true`.
     pub merge: bool,
-    /// Beyond the paper: after optimising F, move boundary layers between neighbouring parts
-    /// while that lowers the outside volume of the union of their bounding volumes, then
-    /// reshape the output ellipsoids to stick out of the solid less. Tighter (TOV typically
-    /// 10-20 % lower) for about a third more time. Default `true`.
-    pub polish: bool,
+    /// Beyond the paper, lower the outside volume of the union of the bounding volumes, which
+    /// F only stands in for: move boundary layers between neighbouring parts while that
+    /// lowers it (at checkpoints of the tolerance loop when splits stall near the TOV
+    /// tolerance, and before the final step, where tolerance mode also moves layers at the
+    /// part with the largest OV while that lowers an unmet MOV), then reshape the output
+    /// volumes (and switch their kinds among the run's) to stick out of the solid less.
+    /// Tighter (TOV typically 10-20 % lower) for about a third more time. Does not turn off
+    /// the boundary sample moves that lower F in every optimisation. Default `true`.
+    pub tighten: bool,
     /// Upper bound on Lloyd sweeps per optimisation. Default 100; at least 1. The loop
     /// usually converges in far fewer.
     pub max_sweeps: usize,
@@ -154,14 +158,15 @@ impl std::fmt::Display for Sampling {
 impl std::str::FromStr for SkeletonMode {
     type Err = String;
 
-    /// `"skin"` (the mesh's own skeleton: [`SkeletonMode::Rig`]), `"auto"` or `"none"`.
+    /// `"rig"` (the mesh's own skeleton: [`SkeletonMode::Rig`]; `"skin"`, its former name,
+    /// is read as the same), `"auto"` or `"none"`.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
-            "skin" => Ok(Self::Rig),
+            "rig" | "skin" => Ok(Self::Rig),
             "auto" => Ok(Self::Auto),
             "none" => Ok(Self::None),
             _ => Err(format!(
-                "{s:?} is not a skeleton mode: use skin, auto or none"
+                "{s:?} is not a skeleton mode: use rig, auto or none"
             )),
         }
     }
@@ -170,7 +175,7 @@ impl std::str::FromStr for SkeletonMode {
 impl std::fmt::Display for SkeletonMode {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
-            Self::Rig => "skin",
+            Self::Rig => "rig",
             Self::Auto => "auto",
             Self::None => "none",
         })
@@ -191,7 +196,7 @@ impl Default for Params {
             max_protrusion_abs: None,
             max_k: 96,
             merge: true,
-            polish: true,
+            tighten: true,
             max_sweeps: 100,
             margin: 0.0,
             hierarchy: true,

@@ -130,7 +130,7 @@ pub struct Segmentation {
     pub sample_parts: Vec<u32>,
     /// The lattice cell size that was used.
     pub cell_size: f64,
-    /// Whether the run's bound on work cut refinement, merging or the polish short (see
+    /// Whether the run's bound on work cut refinement, merging or the tightening short (see
     /// the crate's docs on awkward inputs): the volumes still enclose the mesh, but more
     /// work would have made them tighter. Happens on solids of many specks scattered over a
     /// large box, not on ordinary models. [`BUDGET_WARNING`] says it in words.

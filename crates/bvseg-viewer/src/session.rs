@@ -103,6 +103,17 @@ pub fn note_pool_panic(message: &str) {
     first.get_or_insert_with(|| format!("the core panicked ({message})"));
 }
 
+/// What the viewer says of a failed run: the core's error, and after an allocation that
+/// failed, that the page must be reloaded first (the failure aborted one of its workers).
+pub fn failure_message(e: &Error) -> String {
+    match e {
+        Error::TooComplex(TooComplex::OutOfMemory { .. }) => {
+            format!("{e} (reload the page first)")
+        }
+        _ => e.to_string(),
+    }
+}
+
 /// The size of an allocation that failed (0: none did). Running out of memory aborts the
 /// thread without a panic, so in the page's threaded build the run would wait forever for
 /// its dead worker; the page's allocator ([`NotingAllocator`]) notes the failure here first,
@@ -720,7 +731,7 @@ mod tests {
         let failed = s.advance(Duration::ZERO);
         reset();
         assert_eq!(failed, Progress::Failed);
-        let msg = s.error().unwrap().to_string();
+        let msg = failure_message(s.error().unwrap());
         assert!(msg.contains("reload"), "{msg}");
         assert!(inbox.cancel.is_cancelled(), "the run goes on");
         msg

@@ -326,11 +326,12 @@ Keyword arguments (the command line's options; the defaults are the core's):
 - ``samples`` ({DEFAULTS['samples']}): target number of interior samples.
 - ``seed`` ({DEFAULTS['seed']}): seed of the initialisation with ``k`` (the tolerance mode does not use it); equal seeds, equal results.
 - ``threads`` (all cores): worker threads (a pool of its own); the result does not depend on it.
-- ``merge`` ({DEFAULTS['merge']}), ``polish`` ({DEFAULTS['polish']}): ``False`` is
-  ``--no-merge``, ``--no-polish``.
+- ``merge`` ({DEFAULTS['merge']}), ``tighten`` ({DEFAULTS['tighten']}): ``False`` is
+  ``--no-merge``, ``--no-tighten`` (``polish``, the former name of ``tighten``, is read as it).
 - ``margin`` ({DEFAULTS['margin']}): grow every volume outward by this, in mesh units.
-- ``skeleton`` ({DEFAULTS['skeleton']!r}): where the first parts are seeded from: ``"skin"``
-  (a skinned file's own skeleton), ``"auto"`` (an approximate curve skeleton) or ``"none"``.
+- ``skeleton`` ({DEFAULTS['skeleton']!r}): where the first parts are seeded from: ``"rig"``
+  (the mesh's own skeleton, a skinned file's; ``"skin"``, its former name, is read as it),
+  ``"auto"`` (an approximate curve skeleton) or ``"none"``.
 - ``sampling`` ({DEFAULTS['sampling']!r}): ``"regular"`` or ``"adaptive"`` (a finer lattice whose
   thick inside is gathered into weighted blocks; ``--sampling``).
 - ``hierarchy`` ({DEFAULTS['hierarchy']}): build the bounding-volume hierarchy over the parts

@@ -83,6 +83,7 @@ def segment(
     seed: int | None = ...,
     threads: int | None = ...,
     merge: bool = ...,
+    tighten: bool = ...,
     polish: bool = ...,
     hierarchy: bool = ...,
     margin: float | None = ...,

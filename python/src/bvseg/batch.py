@@ -473,7 +473,10 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, help=f"seed of the initialisation {d('seed')}")
     s.add_argument("--threads", type=int, help="threads per mesh (default: cores / workers locally, 1 on Ray)")
     s.add_argument("--no-merge", action="store_true", help="do not merge parts at the end")
-    s.add_argument("--no-polish", action="store_true", help="do not polish the part boundaries")
+    s.add_argument("--no-tighten", action="store_true",
+                   help="do not tighten: no boundary-layer moves that lower the outside volume, no reshaping of the volumes")
+    # Its former name, still read.
+    s.add_argument("--no-polish", dest="no_tighten", action="store_true", help=argparse.SUPPRESS)
     s.add_argument("--margin", type=float, help=f"grow every volume by this, in mesh units {d('margin')}")
     s.add_argument("--timeout", type=float, metavar="SECONDS", help="give up on a mesh (a whole robot) after this long")
     r = p.add_argument_group("robot options (as bvseg robot)")
@@ -496,8 +499,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     }
     if args.no_merge:
         params["merge"] = False
-    if args.no_polish:
-        params["polish"] = False
+    if args.no_tighten:
+        params["tighten"] = False
     robot_options = {name: getattr(args, name) for name in ROBOT_OPTIONS}
     try:
         rows = run(

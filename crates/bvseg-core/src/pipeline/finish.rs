@@ -1,5 +1,5 @@
-//! The final step: polish the partition (tighten, relieve the worst part, reshape), grow by
-//! the margin, and assemble the result with its hierarchy.
+//! The final step: tighten the partition (move boundary layers, relieve the worst part,
+//! reshape the volumes), grow by the margin, and assemble the result with its hierarchy.
 use crate::math;
 use glam::DVec3;
 
@@ -22,22 +22,23 @@ pub const TIGHTEN_PASSES: Passes = Passes {
 /// Moves of [`relieve_worst`] after the tightening, in tolerance mode.
 pub const RELIEVE_STEPS: usize = 40;
 
-/// `cur` polished, when [`crate::Params::polish`] asks for it and the work bound allows,
-/// grown by the margin, and its protrusion measured on the union; the flag says whether the
-/// work bound cut the polish short.
-pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
+/// The final state from `cur`: tightened and reshaped, when [`crate::Params::tighten`] asks for
+/// it and the work bound allows (or fitted to follow its bones' poses), grown by the margin,
+/// and its protrusion measured on the union; the flag says whether the work bound cut the
+/// tightening short.
+pub fn final_state(ctx: &mut Context, cur: State) -> (State, bool) {
     let mut cut = false;
     let mut out_of_work = |ctx: &Context| {
         let out = ctx.out_of_work();
         cut |= out && !ctx.cancel.is_cancelled();
         out
     };
-    // The polish is optional work: skipped once the work bound is spent.
-    let polish = ctx.params.polish && !out_of_work(ctx);
+    // The tightening is optional work: skipped once the work bound is spent.
+    let tightening = ctx.params.tighten && !out_of_work(ctx);
     // Volumes that follow an animation are fitted anew over its poses: tightening the
     // partition for the volumes at rest first costs a fifth of such a run and changes the
     // posed volumes' TOV by about a percent either way (CesiumMan, Fox, BrainStem).
-    let cur = if polish && !follows_animation(ctx) {
+    let cur = if tightening && !follows_animation(ctx) {
         let mut part = cur.part;
         tighten(ctx, &mut part, TIGHTEN_PASSES);
         if ctx.params.k.is_none() {
@@ -50,7 +51,7 @@ pub fn polish(ctx: &mut Context, cur: State) -> (State, bool) {
     // Nor is reshaping them at rest worth it.
     let cur = if let Some(cur) = posed(ctx, &cur) {
         cur
-    } else if polish && !out_of_work(ctx) {
+    } else if tightening && !out_of_work(ctx) {
         reshaped(ctx, cur)
     } else {
         cur

@@ -2,7 +2,7 @@
 //!
 //! 1. **Sample** the solid's interior ([`crate::sampling`]); done by [`Segmenter::new`].
 //! 2. **Start**: a CVT with one part per connected piece of the solid (or `k` parts with a
-//!    fixed k), **optimised** by the e-weighted Lloyd loop and the boundary polish
+//!    fixed k), **optimised** by the e-weighted Lloyd loop and the boundary moves
 //!    ([`crate::optimization`]).
 //! 3. **Refine** (tolerance mode): **judge** the output volumes; while TOV >= sigma_G, or the
 //!    protrusion is at or above its tolerance, or (when asked for) MOV >= sigma_L, and
@@ -360,7 +360,7 @@ impl Segmenter {
                 protrusion: f64::NAN,
             };
         };
-        let (cur, budget_cut) = finish::polish(&mut self.ctx, cur);
+        let (cur, budget_cut) = finish::final_state(&mut self.ctx, cur);
         self.budget_hit |= budget_cut;
         let step = self.record(cur.step(StepKind::Final));
         self.result = Some(finish::assemble(&self.ctx, &cur, self.history.clone()));

@@ -2,7 +2,7 @@
 //!
 //! A solid of many specks scattered across a large box, whose parts must each span several of
 //! them, makes every fit count a large share of the lattice, and would take minutes. So the
-//! run's optional work (refinement, merging, the polish) has a bound, counted in the outside
+//! run's optional work (refinement, merging, the tightening) has a bound, counted in the outside
 //! cells its fits visit. Once it is spent, those stop where they are: the result is the
 //! partition reached, with its volumes (still enclosing everything), measured.
 use crate::partition::Solid;

@@ -43,7 +43,7 @@ impl Checkpoints {
     pub fn due(&self, history: &[Step], k: usize, tov: f64, params: &Params) -> bool {
         let tol = params.tov;
         let late = k as f64 >= CHECKPOINT_LATE * params.max_k as f64;
-        if !params.polish || tov < tol || (tov >= CHECKPOINT_NEAR * tol && !late) {
+        if !params.tighten || tov < tol || (tov >= CHECKPOINT_NEAR * tol && !late) {
             return false;
         }
         let kept: Vec<&Step> = history
@@ -108,17 +108,17 @@ mod tests {
     }
 
     #[test]
-    fn not_due_when_met_without_polish_too_soon_or_again() {
+    fn not_due_when_met_without_tightening_too_soon_or_again() {
         let params = Params::default();
         let mut c = Checkpoints::default();
         let h = splits(10, 5, 0.35, 0.001);
         let tov = h[4].tov;
         assert!(!c.due(&h, 14, 0.29, &params), "TOV met");
-        let no_polish = Params {
-            polish: false,
+        let no_tightening = Params {
+            tighten: false,
             ..Params::default()
         };
-        assert!(!c.due(&h, 14, tov, &no_polish));
+        assert!(!c.due(&h, 14, tov, &no_tightening));
         assert!(
             !c.due(&h[1..], 14, tov, &params),
             "fewer than the stall count"

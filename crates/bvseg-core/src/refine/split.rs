@@ -22,7 +22,7 @@ pub const SPLIT_TRIES: usize = 2;
 
 /// Lloyd sweeps of the two halves after a split, at most. A boundary between halves often
 /// drifts by one layer per sweep for a hundred sweeps, each gaining little; the boundary
-/// polish that follows makes those moves at a fraction of the cost.
+/// sample moves that follow makes those moves at a fraction of the cost.
 pub const LOCAL_SWEEPS: usize = 10;
 
 /// The parts to try splitting for `aim`, best first (at most [`SPLIT_TRIES`]): by outside

@@ -14,7 +14,7 @@ use crate::partition::{Partition, Solid};
 const MIN_SAMPLES: usize = 8;
 
 /// The start seeded by `links`, optimised with up to `max_sweeps` Lloyd sweeps and the
-/// boundary polish; `None` when no link is nearest to enough samples (a tiny solid), so
+/// boundary moves; `None` when no link is nearest to enough samples (a tiny solid), so
 /// that the caller falls back to the unseeded start.
 ///
 /// `bones`, when not empty, gives a sample the bone its skin moves it with: it then goes to

@@ -14,7 +14,7 @@ use crate::meshes::{self, BUNDLED};
 use crate::platform::{Inbox, Report, Reporter};
 use crate::render::Renderer;
 use crate::scene::{Display, Geometry, MeshGeometry};
-use crate::session::{Progress, Session, Snapshot};
+use crate::session::{failure_message, Progress, Session, Snapshot};
 
 mod panels;
 mod view;
@@ -510,7 +510,7 @@ impl ViewerApp {
             Progress::Failed => {
                 let msg = s
                     .error()
-                    .map_or_else(|| "the run failed".to_string(), |e| e.to_string());
+                    .map_or_else(|| "the run failed".to_string(), failure_message);
                 self.fail(msg);
             }
         }
