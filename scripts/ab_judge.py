@@ -5,7 +5,7 @@ protrusion (max, of the diagonal), and the median wall time, per binary, for one
 worse on the median), without the whole of BENCHMARKS.md. Judged figures are cached by the
 bytes judged, in the cache benchmarks.py keeps, so an unchanged output costs no judging.
 
-    python3 scripts/ab_judge.py /work/base/target/release/bvseg target/release/bvseg
+    python3 scripts/ab_judge.py /tmp/base/target/release/bvseg target/release/bvseg
     python3 scripts/ab_judge.py --args "--sampling adaptive" OLD NEW
     python3 scripts/ab_judge.py --meshes human_1,hand_1 OLD NEW
 

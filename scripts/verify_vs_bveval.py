@@ -9,7 +9,7 @@ enclosure verdicts.
 
     python3 scripts/verify_vs_bveval.py [--outdir target/verify-cmp] [--meshes bunny,horse]
 
-Environment: BVTOOLS_VENV (default /work/bvtools-venv), BVSEG_SHARED (default ../shared).
+Environment: BVTOOLS_VENV (default $BVSEG_SHARED/tools/.venv), BVSEG_SHARED (default ../shared).
 Run `cargo build --release --bin bvseg` first.
 """
 import argparse
@@ -28,7 +28,7 @@ def main():
     ap.add_argument("--meshes", default="")
     a = ap.parse_args()
     shared = os.environ.get("BVSEG_SHARED", os.path.join(ROOT, "..", "shared"))
-    venv = os.environ.get("BVTOOLS_VENV", "/work/bvtools-venv")
+    venv = os.environ.get("BVTOOLS_VENV", os.path.join(shared, "tools", ".venv"))
     py = os.path.join(venv, "bin", "python")
     bveval = os.path.join(shared, "tools", "bveval.py")
     bvseg = os.path.join(ROOT, "target", "release", "bvseg")

@@ -135,7 +135,7 @@ fn needle() {
     // Aspect ratio 100, about three cells across at 3000 samples.
     let mesh = shapes::capsule(DVec3::ZERO, DVec3::new(10.0, 3.0, -2.0), 0.05, 16);
     let (seg, r) = run("needle", &mesh, &params(3000, None, Kinds::ELLIPSOID));
-    // Measured 0.94 (k = 45): a part a few cells across cannot be wrapped tightly by an
+    // Measured 0.84 (k = 38): a part a few cells across cannot be wrapped tightly by an
     // ellipsoid that must also hold the capsule's facets. A single ellipsoid would be 2.3.
     assert!(
         r.tov < 1.2,
@@ -177,7 +177,7 @@ fn many_components_some_smaller_than_a_cell() {
     let mesh = shapes::union(&meshes);
     for kind in [Kinds::ELLIPSOID, Kinds::OBB] {
         let (seg, r) = run("components", &mesh, &params(3000, None, kind));
-        // Measured 0.067 (ellipsoids) and 0.655 (boxes: about ten per ball).
+        // Measured 0.067 (ellipsoids) and 0.430 (boxes: about fifteen per ball).
         let bound = if kind == Kinds::OBB { 1.0 } else { 0.3 };
         assert!(r.tov < bound, "components {kind:?}: TOV {}", r.tov);
         // No volume swallows two pieces (they are at least 2.5 apart).
