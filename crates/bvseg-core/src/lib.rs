@@ -45,6 +45,7 @@ mod enclosure;
 mod error;
 mod fitting;
 mod flooding;
+mod geometry;
 mod hierarchy;
 mod initialization;
 mod kinds;

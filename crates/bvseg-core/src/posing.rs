@@ -21,6 +21,7 @@ use crate::math;
 use glam::{DMat4, DVec3};
 
 use crate::bounding::hull::hull_points;
+use crate::geometry::closest_on_segment;
 use crate::pipeline::{Context, State};
 use crate::{BoundingVolume, Skeleton, Skin};
 
@@ -130,12 +131,5 @@ pub fn posed_volumes(
 
 /// Distance from `p` to the segment `[a, b]`.
 fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let d = b - a;
-    let len2 = d.length_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + t * d)).length()
+    (p - closest_on_segment(p, a, b)).length()
 }

@@ -7,6 +7,7 @@
 use crate::math;
 use glam::DVec3;
 
+use crate::geometry::closest_on_segment;
 use crate::Mesh;
 
 /// No triangle yet, for the start of a search (see [`SurfaceDistance::distance_within`]).
@@ -270,15 +271,7 @@ fn closest_on_triangle(p: DVec3, [a, b, c]: &[DVec3; 3]) -> DVec3 {
     let denom = va + vb + vc;
     if denom.abs() < f64::MIN_POSITIVE || !denom.is_finite() {
         // A degenerate triangle: the nearest of its edges' points.
-        let seg = |u: DVec3, v: DVec3| {
-            let d = v - u;
-            let t = if d.length_squared() > 0.0 {
-                ((p - u).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            u + d * t
-        };
+        let seg = |u: DVec3, v: DVec3| closest_on_segment(p, u, v);
         return [seg(a, b), seg(b, c), seg(c, a)]
             .into_iter()
             .min_by(|x, y| {

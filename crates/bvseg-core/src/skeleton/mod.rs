@@ -13,6 +13,7 @@ pub mod seeds;
 
 use glam::DVec3;
 
+use crate::geometry::closest_on_segment;
 use crate::partition::Solid;
 use crate::Skeleton;
 
@@ -32,14 +33,7 @@ impl Link {
     /// Squared distance from `q` to the segment.
     #[inline]
     pub fn dist2(&self, q: DVec3) -> f64 {
-        let d = self.b - self.a;
-        let len2 = d.length_squared();
-        let t = if len2 > 0.0 {
-            ((q - self.a).dot(d) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (q - (self.a + t * d)).length_squared()
+        (q - closest_on_segment(q, self.a, self.b)).length_squared()
     }
 }
 
