@@ -37,7 +37,7 @@ pub use json::{schema_and_kind, to_json_string, write_json, GENERATOR, SCHEMA, S
 pub use obj::MAX_INPUT_BYTES;
 pub use report::MeshReport;
 pub use skeleton_file::{parse_skeleton, read_skeleton, SKELETON_SCHEMA};
-pub use summary::{CliSummary, RunSummary, Tolerances, ViewerSummary};
+pub use summary::{CliSummary, RunSummary, Tolerances};
 
 /// The mesh formats [`load`] and [`load_bytes`] read, as file extensions (compared
 /// case-insensitively).

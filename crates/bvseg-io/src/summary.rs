@@ -1,7 +1,8 @@
-//! The summary of one segmentation run as one JSON object: what `bvseg segment --json` prints
-//! and what the viewer reports to its page (and prints with `bvseg-viewer --run`).
+//! The summary of one segmentation run as one JSON object: what `bvseg segment --json` prints,
+//! and the start of what the viewer reports to its page (the viewer flattens a [`RunSummary`]
+//! into its own summary, followed by its own fields).
 //!
-//! Both front ends fill the same [`RunSummary`]; its serializer names and formats every key
+//! Every front end fills the same [`RunSummary`]; its serializer names and formats every key
 //! (numbers as `serde_json` prints them, non-finite ones as `null`), and whether the
 //! tolerances were met is always [`Segmentation::tolerances_met`].
 use bvseg_core::{Params, Segmentation};
@@ -9,8 +10,7 @@ use serde::Serialize;
 
 /// The summary of a finished run. The figures every front end has come first, led by the
 /// viewer's page contract `k`, `tov`, `mov`, `f`; then `mesh`, `samples` and `kind`; then
-/// the fields only the command line ([`CliSummary`]) or only the viewer ([`ViewerSummary`])
-/// has, each set present only when given.
+/// the fields only the command line has ([`CliSummary`]), present only when given.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunSummary {
     /// Number of parts.
@@ -36,9 +36,6 @@ pub struct RunSummary {
     /// What the command line adds, after the shared figures.
     #[serde(flatten)]
     pub cli: Option<CliSummary>,
-    /// What the viewer adds, after the shared figures.
-    #[serde(flatten)]
-    pub viewer: Option<ViewerSummary>,
 }
 
 /// The fields of [`RunSummary`] that `bvseg segment --json` adds.
@@ -56,22 +53,6 @@ pub struct CliSummary {
     pub outputs: Vec<String>,
     /// Warnings about the mesh and the run, one line each.
     pub warnings: Vec<String>,
-}
-
-/// The fields of [`RunSummary`] that the viewer adds (its page contract, read by the
-/// browser test).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ViewerSummary {
-    /// Whether the tolerances were met; `null` with a fixed k.
-    pub met: Option<bool>,
-    /// Wall time of the run, in seconds.
-    pub time_s: f64,
-    /// The part of `time_s` spent in the core rather than drawing.
-    pub core_s: f64,
-    /// Frames the run took.
-    pub frames: usize,
-    /// The 3D view's rectangle `[x, y, width, height]` in CSS pixels, when known.
-    pub view: Option<[f32; 4]>,
 }
 
 /// The tolerances of a tolerance-mode run.
@@ -117,12 +98,11 @@ impl RunSummary {
             samples: m.samples,
             kind: seg.kinds.to_string(),
             cli: None,
-            viewer: None,
         }
     }
 
     /// One line of JSON with the keys in the order of the fields: the page contract (`k`,
-    /// `tov`, `mov`, `f`) first. What the viewer reports.
+    /// `tov`, `mov`, `f`) first.
     // Strings, numbers (non-finite ones become null) and string-keyed maps: serde_json
     // cannot fail on them.
     #[allow(clippy::expect_used)]

@@ -7,7 +7,7 @@ use std::path::Path;
 use bvseg_core::{segment, Params};
 use bvseg_io::{
     load, load_bytes, write_atomic, write_json, CliSummary, IoError, LoadOptions, RunSummary,
-    ViewerSummary, MAX_INPUT_BYTES,
+    MAX_INPUT_BYTES,
 };
 use bvseg_testkit::{files as entries, scratch, BUNNY};
 
@@ -240,44 +240,4 @@ fn run_summary_keeps_each_front_end_s_keys_and_order() {
         "keys sorted: {text}"
     );
     assert_eq!(v["tolerances_met"].as_bool(), seg_t.tolerances_met(&tol));
-
-    // The viewer: the page contract first, in its order.
-    let page = RunSummary {
-        viewer: Some(ViewerSummary {
-            met: seg.tolerances_met(&fixed),
-            time_s: 2.0,
-            core_s: f64::NAN,
-            frames: 7,
-            view: Some([1.0, 2.0, 3.5, 4.0]),
-        }),
-        ..RunSummary::new("bunny.obj", &seg)
-    };
-    let text = page.to_json();
-    assert!(
-        text.starts_with(&format!("{{\"k\":2,\"tov\":{},", m.tov)),
-        "{text}"
-    );
-    assert_eq!(
-        keys(&text),
-        [
-            "k",
-            "tov",
-            "mov",
-            "f",
-            "protrusion",
-            "protrusion_rel",
-            "mesh",
-            "samples",
-            "kind",
-            "met",
-            "time_s",
-            "core_s",
-            "frames",
-            "view"
-        ]
-    );
-    assert!(
-        text.contains("\"met\":null") && text.contains("\"core_s\":null"),
-        "{text}"
-    );
 }

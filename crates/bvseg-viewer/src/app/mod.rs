@@ -647,17 +647,45 @@ impl eframe::App for ViewerApp {
 /// view's rectangle in CSS pixels, so that a browser test knows where to look).
 pub fn summary_json(mesh: &str, s: &Session, view: Option<[f32; 4]>) -> Option<String> {
     let res = s.result()?;
-    let summary = bvseg_io::RunSummary {
-        viewer: Some(bvseg_io::ViewerSummary {
-            met: res.tolerances_met(s.params()),
-            time_s: s.wall().as_secs_f64(),
-            core_s: s.busy().as_secs_f64(),
-            frames: s.calls(),
-            view,
-        }),
-        ..bvseg_io::RunSummary::new(mesh, res)
+    let summary = PageSummary {
+        run: bvseg_io::RunSummary::new(mesh, res),
+        met: res.tolerances_met(s.params()),
+        time_s: s.wall().as_secs_f64(),
+        core_s: s.busy().as_secs_f64(),
+        frames: s.calls(),
+        view,
     };
     Some(summary.to_json())
+}
+
+/// What the viewer reports of a run: the summary every front end has, then the viewer's own
+/// fields (its page contract, read by the browser test).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+struct PageSummary {
+    /// The shared figures, first.
+    #[serde(flatten)]
+    run: bvseg_io::RunSummary,
+    /// Whether the tolerances were met; `null` with a fixed k.
+    met: Option<bool>,
+    /// Wall time of the run, in seconds.
+    time_s: f64,
+    /// The part of `time_s` spent in the core rather than drawing.
+    core_s: f64,
+    /// Frames the run took.
+    frames: usize,
+    /// The 3D view's rectangle `[x, y, width, height]` in CSS pixels, when known.
+    view: Option<[f32; 4]>,
+}
+
+impl PageSummary {
+    /// One line of JSON with the keys in the order of the fields: the page contract (`k`,
+    /// `tov`, `mov`, `f`) first.
+    // Strings, numbers (non-finite ones become null) and arrays: serde_json cannot fail on
+    // them.
+    #[allow(clippy::expect_used)]
+    fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("a PageSummary always serializes")
+    }
 }
 
 #[cfg(test)]
@@ -690,6 +718,61 @@ mod tests {
         assert_eq!(v["met"], serde_json::Value::Null);
         assert_eq!(v["frames"].as_u64(), Some(s.calls() as u64));
         assert_eq!(v["view"][3].as_f64(), Some(4.0));
+    }
+
+    #[test]
+    fn page_summary_keys_come_in_the_contract_order_and_nan_is_null() {
+        let mesh = load_bundled(&BUNDLED[0]).unwrap();
+        let params = Params {
+            samples: 2000,
+            k: Some(2),
+            ..Params::default()
+        };
+        let seg = bvseg_core::segment(&mesh, &params).unwrap();
+        let page = PageSummary {
+            run: bvseg_io::RunSummary::new("bunny.obj", &seg),
+            met: seg.tolerances_met(&params),
+            time_s: 2.0,
+            core_s: f64::NAN,
+            frames: 7,
+            view: Some([1.0, 2.0, 3.5, 4.0]),
+        };
+        let text = page.to_json();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        // serde_json's map is sorted here, so the order is read from the text itself.
+        let mut keys: Vec<(usize, String)> = v
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(|k| (text.find(&format!("\"{k}\":")).unwrap(), k.clone()))
+            .collect();
+        keys.sort();
+        let keys: Vec<String> = keys.into_iter().map(|(_, k)| k).collect();
+        assert_eq!(
+            keys,
+            [
+                "k",
+                "tov",
+                "mov",
+                "f",
+                "protrusion",
+                "protrusion_rel",
+                "mesh",
+                "samples",
+                "kind",
+                "met",
+                "time_s",
+                "core_s",
+                "frames",
+                "view"
+            ]
+        );
+        let start = format!("{{\"k\":2,\"tov\":{},", seg.metrics.tov);
+        assert!(text.starts_with(&start), "{text}");
+        assert!(
+            text.contains("\"met\":null") && text.contains("\"core_s\":null"),
+            "{text}"
+        );
     }
 
     #[test]
