@@ -115,6 +115,18 @@ pub struct ParamArgs {
     #[arg(long, value_name = "N", default_value_t = Params::default().max_k)]
     pub max_k: usize,
 
+    /// How the mesh is bounded: `auto` (the default) partitions the sampled interior of a
+    /// closed solid (the paper's method) and fits clusters of triangles where there is no
+    /// interior to sample (open or thin pieces, props made of pieces one volume each holds,
+    /// skinned characters); `lattice` or `surface` forces one (docs/method.md).
+    #[arg(long, value_name = "auto|lattice|surface", default_value_t = Params::default().route)]
+    pub route: bvseg_core::Route,
+
+    /// Most volumes per bone of a skinned character (surface route): 1 gives one volume per
+    /// bone that moves triangles, a ragdoll. Default 3.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub per_bone: Option<u64>,
+
     /// Kinds of volume a part may get, as a comma list of ellipsoid, obb (or box), sphere,
     /// capsule, cylinder, hull; mixed = ellipsoid,obb. Each part gets the kind that adds the
     /// least outside volume. Default: every primitive (no hull).
@@ -309,6 +321,8 @@ impl ParamArgs {
             // A skeleton file is attached to the mesh (see `rigged`) and used as its own.
             skeleton: self.skeleton.mode(),
             sampling: self.sampling,
+            route: self.route,
+            per_bone: self.per_bone.map(|n| n as usize),
             ..Params::default()
         };
         params.validate()?;

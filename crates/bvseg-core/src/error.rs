@@ -169,6 +169,9 @@ pub enum ParamError {
         /// Largest allowed ([`crate::MAX_SAMPLES`]).
         max: usize,
     },
+    /// [`crate::Params::per_bone`] is 0.
+    #[error("per_bone must be at least 1")]
+    PerBoneZero,
     /// [`crate::Params::k`] is 0.
     #[error("k must be at least 1")]
     KZero,

@@ -68,6 +68,7 @@ mod rig;
 mod rng;
 mod sampling;
 pub mod shapes;
+mod shells;
 mod skeleton;
 mod tightening;
 mod volume;
@@ -77,7 +78,7 @@ pub use error::{Error, MeshError, NoVolume, ParamError, RigError, TooComplex};
 pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
 pub use params::{
-    Params, Sampling, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES,
+    Params, Route, Sampling, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES,
 };
 pub use pipeline::Segmenter;
 pub use result::{

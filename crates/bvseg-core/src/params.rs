@@ -103,6 +103,55 @@ pub struct Params {
     /// finer lattice whose thick inside is gathered into weighted blocks, so that thin
     /// features get more samples at the same [`Params::samples`].
     pub sampling: Sampling,
+    /// How the mesh is bounded: [`Route::Auto`] (the default) samples the interior of a solid
+    /// on a lattice and partitions it (the paper's method) and bounds clusters of triangles
+    /// from the surface where the lattice cannot see an interior: meshes with open or thin
+    /// pieces, meshes of several pieces that one volume each holds, skinned characters, in
+    /// tolerance mode (a fixed [`Params::k`] always takes the lattice).
+    pub route: Route,
+    /// Most volumes per bone of a skinned mesh on the surface route: 1 gives one volume per
+    /// bone that moves triangles (a ragdoll). Default `None`: 3. At least 1; a count.
+    pub per_bone: Option<usize>,
+}
+
+/// How a run bounds the mesh (see [`Params::route`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Route {
+    /// The surface route for meshes whose interior the lattice cannot sample (open or thin
+    /// pieces, several pieces of one volume each, skinned characters), the lattice otherwise.
+    #[default]
+    Auto,
+    /// Sample the solid's interior and partition it (the paper's method): needs a closed
+    /// solid the lattice can see.
+    Lattice,
+    /// Cluster the triangles and fit each cluster's corners: encloses every triangle of any
+    /// mesh, measures no interior (TOV and MOV are not measured).
+    Surface,
+}
+
+impl std::str::FromStr for Route {
+    type Err = String;
+
+    /// `"auto"`, `"lattice"` or `"surface"`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "lattice" => Ok(Self::Lattice),
+            "surface" => Ok(Self::Surface),
+            _ => Err(format!("{s:?} is not a route: use auto, lattice or surface")),
+        }
+    }
+}
+
+impl std::fmt::Display for Route {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Auto => "auto",
+            Self::Lattice => "lattice",
+            Self::Surface => "surface",
+        })
+    }
 }
 
 /// How the solid's interior is sampled (see [`Params::sampling`]).
@@ -202,6 +251,8 @@ impl Default for Params {
             hierarchy: true,
             skeleton: SkeletonMode::Rig,
             sampling: Sampling::Regular,
+            route: Route::Auto,
+            per_bone: None,
         }
     }
 }
@@ -285,6 +336,9 @@ impl Params {
         }
         if self.max_sweeps == 0 {
             return Err(ParamError::MaxSweeps);
+        }
+        if self.per_bone == Some(0) {
+            return Err(ParamError::PerBoneZero);
         }
         if self.kinds.is_empty() {
             return Err(ParamError::NoKinds);

@@ -130,6 +130,6 @@ pub fn posed_volumes(
 }
 
 /// Distance from `p` to the segment `[a, b]`.
-fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+pub(crate) fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     (p - closest_on_segment(p, a, b)).length()
 }

@@ -138,6 +138,11 @@ pub struct Segmentation {
     /// The skeleton the parts' [`Part::bone`]s index (the mesh's rig's), `None` when the
     /// mesh has no rig.
     pub skeleton: Option<crate::Skeleton>,
+    /// The route the run took ([`crate::Route::Lattice`] or [`crate::Route::Surface`]). On
+    /// the surface route no interior is sampled: [`Metrics::tov`], [`Metrics::mov`] and
+    /// [`Metrics::f`] are 0 and not measured, the parts have no samples, and
+    /// [`Segmentation::unmet`] checks the protrusion only.
+    pub route: crate::Route,
 }
 
 /// What the front ends (the CLI, the Python package) warn when
@@ -218,7 +223,8 @@ impl Segmentation {
             over: 0.0,
         };
         let mut out = Vec::new();
-        if tol.tov_bad(x) {
+        let lattice = self.route != crate::Route::Surface;
+        if lattice && tol.tov_bad(x) {
             out.push(Unmet {
                 tolerance: Tolerance::Tov,
                 value: m.tov,
@@ -232,7 +238,7 @@ impl Segmentation {
                 limit: tol.protrusion,
             });
         }
-        if let Some(t) = tol.mov.filter(|_| tol.mov_bad(x)) {
+        if let Some(t) = tol.mov.filter(|_| lattice && tol.mov_bad(x)) {
             out.push(Unmet {
                 tolerance: Tolerance::Mov,
                 value: m.mov,

@@ -25,7 +25,7 @@ mod surface;
 
 pub use cell::{Cell, Cells};
 pub use coverage::Coverage;
-pub use protrusion::protrusion_capped;
+pub use protrusion::{protrusion_capped, surface_protrusion, surface_protrusion_exceeds};
 pub use surface::SurfaceDistance;
 
 use glam::DVec3;

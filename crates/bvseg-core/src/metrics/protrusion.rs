@@ -51,7 +51,49 @@ pub fn protrusion(
     grid: &Grid,
     others: &[BoundingVolume],
 ) -> f64 {
-    protrusion_by(v, grid, others, |p, _| Some(surface.distance(p))).unwrap_or(0.0)
+    protrusion_by(v, outside(grid), others, |p, _| Some(surface.distance(p))).unwrap_or(0.0)
+}
+
+/// Whether [`surface_protrusion`] of `v` (alone) exceeds `tol`: most volumes that do show it
+/// at a boundary sample, found without measuring the rest.
+pub fn surface_protrusion_exceeds(v: &BoundingVolume, surface: &SurfaceDistance, tol: f64) -> bool {
+    let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
+    let spent = std::cell::Cell::new(0u64);
+    let (samples, _) = boundary_samples(v);
+    let over = samples.iter().any(|&t| {
+        surface
+            .distance_within(v.world(t), (f64::INFINITY, tol), &near, &spent, u64::MAX)
+            .is_some_and(|d| d > tol)
+    });
+    crate::work::add(spent.get() as usize);
+    over || surface_protrusion(v, surface, &[]) > tol
+}
+
+/// Whether a point is outside the sampled solid (in a lattice cell without a sample).
+fn outside(grid: &Grid) -> impl Fn(DVec3) -> bool + '_ {
+    move |p| {
+        let [i, j, k] = grid.cell_of(p);
+        grid.sample_at(i, j, k) == NONE
+    }
+}
+
+/// The protrusion of `v` over a surface with no inside (the surface route of
+/// [`crate::shells`]): the largest distance to the surface of the points of `v`'s boundary
+/// outside every volume of `others`, wherever they are, as the judges measure it.
+pub fn surface_protrusion(v: &BoundingVolume, surface: &SurfaceDistance, others: &[BoundingVolume]) -> f64 {
+    let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
+    let spent = std::cell::Cell::new(0u64);
+    let last = std::cell::Cell::new(None::<(DVec3, f64)>);
+    let value = protrusion_by(v, |_| true, others, |p, floor| {
+        let bound = last
+            .get()
+            .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
+        let d = surface.distance_within(p, (bound, floor), &near, &spent, u64::MAX)?;
+        last.set(Some((p, d)));
+        Some(d)
+    });
+    crate::work::add(spent.get() as usize);
+    value.unwrap_or(0.0)
 }
 
 /// [`protrusion`] within a bound on the search's work: each fit may visit `cap` nodes and
@@ -74,7 +116,7 @@ pub fn protrusion_capped(
     // For the same reason, the last point's nearest triangle is tried first.
     let last = std::cell::Cell::new(None::<(DVec3, f64)>);
     let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
-    let exact = protrusion_by(v, grid, others, |p, floor| {
+    let exact = protrusion_by(v, outside(grid), others, |p, floor| {
         let bound = last
             .get()
             .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
@@ -102,7 +144,7 @@ pub fn protrusion_bound(
             .fold(f64::INFINITY, math::min)
             .sqrt()
     };
-    protrusion_by(v, grid, others, |p, _| Some(nearest(p))).unwrap_or(0.0)
+    protrusion_by(v, outside(grid), others, |p, _| Some(nearest(p))).unwrap_or(0.0)
 }
 
 /// [`protrusion`] with the distance `dist`; `None` as soon as `dist` gives up. `dist(p,
@@ -110,7 +152,7 @@ pub fn protrusion_bound(
 /// the distances above it decide anything (see `distance_within`).
 fn protrusion_by(
     v: &BoundingVolume,
-    grid: &Grid,
+    outside: impl Fn(DVec3) -> bool,
     others: &[BoundingVolume],
     dist: impl Fn(DVec3, f64) -> Option<f64>,
 ) -> Option<f64> {
@@ -118,8 +160,7 @@ fn protrusion_by(
     // Only points that count: on the union's boundary and outside the solid.
     let counts = |t: Local| {
         let p = world(t);
-        let [i, j, k] = grid.cell_of(p);
-        grid.sample_at(i, j, k) == NONE && others.iter().all(|o| o.gauge(p) >= 1.0 - 1e-7)
+        outside(p) && others.iter().all(|o| o.gauge(p) >= 1.0 - 1e-7)
     };
     let gave_up = std::cell::Cell::new(false);
     let value = |t: Local, floor: f64| {

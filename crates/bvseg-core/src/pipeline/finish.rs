@@ -210,6 +210,7 @@ pub fn assemble(ctx: &Context, cur: &State, history: Vec<Step>) -> Segmentation 
             .as_ref()
             .and(ctx.mesh.rig())
             .map(|r| r.skeleton.clone()),
+        route: crate::Route::Lattice,
     }
 }
 

@@ -20,7 +20,10 @@
 //! the part's exact moments, so only the parts a step changed are refitted.
 mod context;
 mod finish;
+mod segmenter;
 mod state;
+
+pub use segmenter::Segmenter;
 
 pub(crate) use context::Context;
 pub(crate) use state::State;
@@ -48,25 +51,8 @@ enum Phase {
     Done,
 }
 
-/// The segmentation as a sequence of steps, for progress display and interactive use: call
-/// [`Segmenter::step`] until it returns `None`, then [`Segmenter::finish`]. Each step is a
-/// bounded amount of work (one split or merge with its re-optimisation), so a UI can run one
-/// per frame.
-///
-/// ```
-/// # use bvseg_core::{Mesh, Params, Segmenter};
-/// # use glam::{DMat3, DVec3};
-/// # let mesh = bvseg_core::shapes::ellipsoid(DVec3::ZERO, DVec3::new(2.0, 1.0, 1.0), DMat3::IDENTITY, 16);
-/// let params = Params { samples: 2000, ..Params::default() };
-/// let mut run = Segmenter::new(&mesh, &params)?;
-/// while let Some(step) = run.step() {
-///     println!("{:?}: k = {}, TOV = {:.3}", step.kind, step.k, step.tov);
-/// }
-/// let seg = run.finish()?;
-/// assert!(seg.parts.len() >= 1);
-/// # Ok::<(), bvseg_core::Error>(())
-/// ```
-pub struct Segmenter {
+/// The lattice route's run: the paper's loop (see the module's docs).
+pub(crate) struct Lattice {
     ctx: Context,
     tol: Tolerances,
     phase: Phase,
@@ -82,18 +68,7 @@ pub struct Segmenter {
     budget_hit: bool,
 }
 
-impl Segmenter {
-    /// Validate the input and sample the solid. The remaining work happens in
-    /// [`Segmenter::step`].
-    ///
-    /// # Errors
-    ///
-    /// [`Error::InvalidParams`] when `params` fails [`Params::validate`], and the sampling's
-    /// errors: [`Error::NoVolume`], [`Error::TooComplex`].
-    pub fn new(mesh: &Mesh, params: &Params) -> Result<Self, Error> {
-        Self::with_cancel(mesh, params, Cancel::new())
-    }
-
+impl Lattice {
     /// Like [`Segmenter::new`], stopping when `cancel` is set: [`Segmenter::step`] then
     /// returns `None` and [`Segmenter::finish`] [`Error::Cancelled`].
     ///
@@ -197,16 +172,6 @@ impl Segmenter {
                 return step;
             }
         }
-    }
-
-    /// Run any remaining steps and return the result.
-    ///
-    /// # Errors
-    ///
-    /// [`Error::Cancelled`] when the run's [`Cancel`] flag was set before it ended, and
-    /// [`Error::Internal`] if the run broke one of its own invariants.
-    pub fn finish(mut self) -> Result<Segmentation, Error> {
-        self.take_result()
     }
 
     /// Like [`Segmenter::finish`], keeping the segmenter, so that [`Segmenter::hierarchy`]

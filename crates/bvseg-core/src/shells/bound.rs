@@ -1,0 +1,183 @@
+//! A cluster's volume: of the run's kinds, the smallest that holds its triangles (in every
+//! pose, for a skinned mesh), and how far it reaches past the surface.
+use glam::{DMat4, DVec3};
+
+use crate::bounding::{self, hull::hull_points};
+use crate::math;
+use crate::mesh::Mesh;
+use crate::metrics::{surface_protrusion, surface_protrusion_exceeds, SurfaceDistance};
+use crate::params::Params;
+use crate::rig::{Skeleton, Skin};
+use crate::volume::BoundingVolume;
+
+/// Smallest radius of a fitted volume, relative to the diagonal: a flat cluster (a quad, a
+/// leaf card) gets a box this thick rather than a degenerate one.
+const MIN_R_REL: f64 = 1e-4;
+
+/// A corner in a pose that lies this close (relative to the diagonal) to the last sample of
+/// it kept is left out of the fit, and the volume grown by that much instead: most corners
+/// come back to their rest position with their bone, and leaving them out keeps fits fast.
+const KEEP_REL: f64 = 5e-4;
+
+/// A cluster's fitted volume.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    /// The volume.
+    pub volume: BoundingVolume,
+    /// The hull points it was fitted to (rest pose; poses carried back by the bone).
+    pub hull: Vec<DVec3>,
+    /// What the volume was grown by for the motion between sampled poses.
+    pub margin: f64,
+    /// How far its boundary reaches from the surface (mesh units), alone: measured when first
+    /// asked (most candidate fits of the split and the merge are decided by size alone).
+    protrusion: std::sync::OnceLock<f64>,
+}
+
+impl Fit {
+    /// Whether the volume keeps within the tolerance (cheaper than its protrusion when it
+    /// does not).
+    pub fn within(&self, b: &Bounder) -> bool {
+        match self.protrusion.get() {
+            Some(&p) => p <= b.tol,
+            None => !surface_protrusion_exceeds(&self.volume, &b.surface, b.tol),
+        }
+    }
+
+    /// How far the volume's boundary reaches from the surface (mesh units), alone.
+    pub fn protrusion(&self, b: &Bounder) -> f64 {
+        *self
+            .protrusion
+            .get_or_init(|| surface_protrusion(&self.volume, &b.surface, &[]))
+    }
+}
+
+/// Fits volumes to sets of triangles.
+pub struct Bounder<'a> {
+    pub mesh: &'a Mesh,
+    pub params: &'a Params,
+    pub surface: SurfaceDistance,
+    /// The protrusion tolerance, mesh units.
+    pub tol: f64,
+    pub diagonal: f64,
+    /// The skin and skeleton, when the volumes follow bones.
+    pub skin: Option<(&'a Skeleton, &'a Skin)>,
+}
+
+impl<'a> Bounder<'a> {
+    pub fn new(mesh: &'a Mesh, params: &'a Params, skin: Option<(&'a Skeleton, &'a Skin)>) -> Self {
+        let (lo, hi) = mesh.bbox();
+        let diagonal = (hi - lo).length();
+        Self {
+            mesh,
+            params,
+            surface: SurfaceDistance::new(mesh),
+            tol: params.protrusion_tolerance(diagonal),
+            diagonal,
+            skin,
+        }
+    }
+
+    /// The volume of `tris`, moving with `bone` when there is a skin.
+    pub fn fit(&self, tris: &[u32], bone: Option<usize>) -> Fit {
+        let (points, margin) = self.points(tris, bone);
+        self.fit_points(&points, margin)
+    }
+
+    /// The volume of two fits' points together: the hull of their hulls, and the larger
+    /// margin (each corner's own margin is at most its fit's).
+    pub fn fit_both(&self, a: &Fit, b: &Fit) -> Fit {
+        let mut points = a.hull.clone();
+        points.extend_from_slice(&b.hull);
+        self.fit_points(&points, a.margin.max(b.margin))
+    }
+
+    fn fit_points(&self, points: &[DVec3], margin: f64) -> Fit {
+        let hull = hull_points(points);
+        let hull = if hull.is_empty() { points.to_vec() } else { hull };
+        let min_r = MIN_R_REL * self.diagonal;
+        let volume = self
+            .params
+            .kinds
+            .shapes()
+            .map(|s| {
+                bounding::fit(s, &hull, min_r, self.params.max_hull_vertices)
+                    .scaled_to_contain(hull.iter().copied())
+                    .grown(margin)
+            })
+            .filter(|v| v.volume().is_finite())
+            .min_by(|a, b| a.volume().total_cmp(&b.volume()))
+            .expect("a run has at least one kind");
+        Fit {
+            volume,
+            hull,
+            margin,
+            protrusion: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// The points a volume of `tris` must hold, and the margin to grow it by: the corners at
+    /// rest and, with a skin, their positions in every pose carried back into the rest pose by
+    /// `bone` (a volume `V` at rest is `G(t) G(rest)⁻¹ V` in a pose, so it holds `x(t)` there
+    /// exactly when `V` holds `G(rest) G(t)⁻¹ x(t)`). Between two sampled poses a corner
+    /// strays from the chord by about what the chord of three consecutive poses misses, which
+    /// the margin adds (as the lattice route does: see `crate::posing`).
+    fn points(&self, tris: &[u32], bone: Option<usize>) -> (Vec<DVec3>, f64) {
+        let mesh = self.mesh;
+        let mut rest: Vec<u32> = tris
+            .iter()
+            .flat_map(|&t| mesh.triangles()[t as usize])
+            .collect();
+        rest.sort_unstable();
+        rest.dedup();
+        let mut points: Vec<DVec3> = rest.iter().map(|&v| mesh.vertices()[v as usize]).collect();
+        let (Some(b), Some((skeleton, skin))) = (bone, self.skin) else {
+            return (points, 0.0);
+        };
+        if skin.poses.is_empty() {
+            return (points, 0.0);
+        }
+        let mut corners: Vec<(u32, DVec3)> = tris
+            .iter()
+            .flat_map(|&t| {
+                let r = mesh.corners(t as usize);
+                let p = skin.corners[t as usize];
+                (0..3).map(move |c| (p[c], r[c]))
+            })
+            .collect();
+        corners.sort_unstable_by_key(|c| c.0);
+        corners.dedup_by_key(|c| c.0);
+        let keep = KEEP_REL * self.diagonal;
+        let n = corners.len();
+        let mut last: Vec<DVec3> = corners.iter().map(|c| c.1).collect();
+        let (mut now, mut before, mut before2) =
+            (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        let (mut worst, mut left_out) = (0.0f64, false);
+        for (k, p) in skin.poses.iter().enumerate() {
+            let back: DMat4 = skeleton.joints[b].rest * p.joints[b].inverse();
+            for ((&(c, _), last), x) in corners.iter().zip(&mut last).zip(&mut now) {
+                *x = back.transform_point3(p.vertices[c as usize]);
+                if x.distance_squared(*last) > keep * keep {
+                    points.push(*x);
+                    *last = *x;
+                } else {
+                    left_out = true;
+                }
+            }
+            let poses = &skin.poses;
+            if k >= 2
+                && (poses[k - 2].animation, poses[k - 1].animation) == (p.animation, p.animation)
+            {
+                for c in 0..n {
+                    worst = math::max(
+                        worst,
+                        crate::posing::segment_distance(before[c], before2[c], now[c]),
+                    );
+                }
+            }
+            std::mem::swap(&mut before2, &mut before);
+            std::mem::swap(&mut before, &mut now);
+        }
+        let margin = 0.5 * worst + if left_out { keep } else { 0.0 };
+        (points, margin)
+    }
+}
