@@ -164,7 +164,17 @@ pub fn unmet_message(seg: &Segmentation, params: &Params) -> (String, String) {
         .collect();
     let what = format!("tolerances not met at k = {} ({})", m.k, parts.join(", "));
     let mov_only = unmet.iter().all(|u| u.tolerance == Tolerance::Mov);
-    let hint = if mov_only {
+    let surface = seg.route == bvseg_core::Route::Surface;
+    let hint = if surface && seg.skeleton.is_some() {
+        "each bone's volumes enclose its triangles in every pose, which keeps them loose at \
+         rest; raise --per-bone, or loosen --max-protrusion"
+    } else if surface && m.k < params.max_k {
+        "splitting stopped paying: what protrudes is single triangles (or pieces) that no \
+         volume of these kinds holds more tightly; add hull to --bv, or loosen \
+         --max-protrusion"
+    } else if surface {
+        "the part budget ran out: raise --max-k, or loosen --max-protrusion"
+    } else if mov_only {
         "flat ends and pointed tips keep MOV up whatever k (docs/method.md, \"What MOV can \
          reach\"); raise --mov or leave it out"
     } else {
@@ -218,6 +228,23 @@ fn print_summary(
     } else {
         common::shown(outputs).join(", ")
     };
+    if seg.route == bvseg_core::Route::Surface {
+        let text = format!(
+            "mesh       {name}\n\
+             triangles  {}\n\
+             route      surface (clusters of triangles; no interior sampled, TOV not measured)\n\
+             k          {} ({})\n\
+             protrusion {:.6} of the diagonal ({:.6})\n\
+             time       {seconds:.2} s\n\
+             output     {written}\n",
+            loaded.mesh.triangles().len(),
+            m.k,
+            shape_counts(seg),
+            m.protrusion_rel,
+            m.protrusion,
+        );
+        return write_stdout(&text);
+    }
     let text = format!(
         "mesh       {name}\n\
          triangles  {}\n\

@@ -78,7 +78,8 @@ pub use error::{Error, MeshError, NoVolume, ParamError, RigError, TooComplex};
 pub use kinds::{Kinds, Target, UnknownKind};
 pub use mesh::{weld, Mesh, MAX_COORDINATE};
 pub use params::{
-    Params, Route, Sampling, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K, MAX_SAMPLES,
+    Params, Route, Sampling, SkeletonMode, DEFAULT_MAX_PROTRUSION, MAX_HULL_VERTICES, MAX_K,
+    MAX_SAMPLES,
 };
 pub use pipeline::Segmenter;
 pub use result::{

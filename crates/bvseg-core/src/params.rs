@@ -139,7 +139,9 @@ impl std::str::FromStr for Route {
             "auto" => Ok(Self::Auto),
             "lattice" => Ok(Self::Lattice),
             "surface" => Ok(Self::Surface),
-            _ => Err(format!("{s:?} is not a route: use auto, lattice or surface")),
+            _ => Err(format!(
+                "{s:?} is not a route: use auto, lattice or surface"
+            )),
         }
     }
 }

@@ -147,6 +147,10 @@ struct Metrics {
     diagonal: f64,
     samples: usize,
     f: f64,
+    /// `"surface"` on the surface route, whose `tov`, `mov` and `f` are not measured (0);
+    /// absent on the lattice route.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    route: Option<&'static str>,
 }
 
 #[derive(Serialize)]
@@ -210,6 +214,7 @@ pub fn to_json_string(seg: &Segmentation) -> String {
         diagonal: m.diagonal,
         samples: m.samples,
         f: m.f,
+        route: (seg.route == bvseg_core::Route::Surface).then_some("surface"),
     };
     let mut out = String::new();
     let (schema, _) = schema_and_kind(

@@ -80,18 +80,27 @@ fn outside(grid: &Grid) -> impl Fn(DVec3) -> bool + '_ {
 /// The protrusion of `v` over a surface with no inside (the surface route of
 /// [`crate::shells`]): the largest distance to the surface of the points of `v`'s boundary
 /// outside every volume of `others`, wherever they are, as the judges measure it.
-pub fn surface_protrusion(v: &BoundingVolume, surface: &SurfaceDistance, others: &[BoundingVolume]) -> f64 {
+pub fn surface_protrusion(
+    v: &BoundingVolume,
+    surface: &SurfaceDistance,
+    others: &[BoundingVolume],
+) -> f64 {
     let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
     let spent = std::cell::Cell::new(0u64);
     let last = std::cell::Cell::new(None::<(DVec3, f64)>);
-    let value = protrusion_by(v, |_| true, others, |p, floor| {
-        let bound = last
-            .get()
-            .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
-        let d = surface.distance_within(p, (bound, floor), &near, &spent, u64::MAX)?;
-        last.set(Some((p, d)));
-        Some(d)
-    });
+    let value = protrusion_by(
+        v,
+        |_| true,
+        others,
+        |p, floor| {
+            let bound = last
+                .get()
+                .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
+            let d = surface.distance_within(p, (bound, floor), &near, &spent, u64::MAX)?;
+            last.set(Some((p, d)));
+            Some(d)
+        },
+    );
     crate::work::add(spent.get() as usize);
     value.unwrap_or(0.0)
 }

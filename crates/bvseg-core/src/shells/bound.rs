@@ -93,7 +93,11 @@ impl<'a> Bounder<'a> {
 
     fn fit_points(&self, points: &[DVec3], margin: f64) -> Fit {
         let hull = hull_points(points);
-        let hull = if hull.is_empty() { points.to_vec() } else { hull };
+        let hull = if hull.is_empty() {
+            points.to_vec()
+        } else {
+            hull
+        };
         let min_r = MIN_R_REL * self.diagonal;
         let volume = self
             .params
@@ -149,8 +153,11 @@ impl<'a> Bounder<'a> {
         let keep = KEEP_REL * self.diagonal;
         let n = corners.len();
         let mut last: Vec<DVec3> = corners.iter().map(|c| c.1).collect();
-        let (mut now, mut before, mut before2) =
-            (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        let (mut now, mut before, mut before2) = (
+            vec![DVec3::ZERO; n],
+            vec![DVec3::ZERO; n],
+            vec![DVec3::ZERO; n],
+        );
         let (mut worst, mut left_out) = (0.0f64, false);
         for (k, p) in skin.poses.iter().enumerate() {
             let back: DMat4 = skeleton.joints[b].rest * p.joints[b].inverse();

@@ -11,7 +11,12 @@ use super::Atom;
 const NEAREST: usize = 6;
 
 /// Merge `clusters` as the module says, down to at most `max_k`.
-pub fn merge(b: &Bounder, atoms: &[Atom], mut clusters: Vec<Cluster>, max_k: usize) -> Vec<Cluster> {
+pub fn merge(
+    b: &Bounder,
+    atoms: &[Atom],
+    mut clusters: Vec<Cluster>,
+    max_k: usize,
+) -> Vec<Cluster> {
     // Candidate merges by pair of cluster ids; ids are never reused, so a cached merge of
     // two live clusters is still valid.
     let mut ids: Vec<usize> = (0..clusters.len()).collect();
@@ -85,7 +90,12 @@ pub fn merge(b: &Bounder, atoms: &[Atom], mut clusters: Vec<Cluster>, max_k: usi
 /// The bone of a merge: that of the cluster with more triangles (a volume fitted with a bone
 /// holds triangles of any bone in every pose; it is tightest on its own bone's).
 fn bone_of(atoms: &[Atom], a: &Cluster, b: &Cluster) -> Option<usize> {
-    let n = |c: &Cluster| c.atoms.iter().map(|&x| atoms[x].triangles.len()).sum::<usize>();
+    let n = |c: &Cluster| {
+        c.atoms
+            .iter()
+            .map(|&x| atoms[x].triangles.len())
+            .sum::<usize>()
+    };
     if n(b) > n(a) {
         b.bone
     } else {
@@ -109,7 +119,11 @@ fn near_pairs(clusters: &[Cluster], tol: f64, forced: bool) -> Vec<(usize, usize
             .filter(|&(g, _)| forced || g <= 2.0 * tol)
             .collect();
         near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        out.extend(near.iter().take(NEAREST).map(|&(_, j)| (i.min(j), i.max(j))));
+        out.extend(
+            near.iter()
+                .take(NEAREST)
+                .map(|&(_, j)| (i.min(j), i.max(j))),
+        );
     }
     out.sort_unstable();
     out.dedup();

@@ -46,10 +46,7 @@ pub struct Atom {
 }
 
 /// The skeleton and skin the volumes follow, when the run uses them.
-fn skin_of<'a>(
-    mesh: &'a Mesh,
-    params: &Params,
-) -> Option<(&'a crate::Skeleton, &'a crate::Skin)> {
+fn skin_of<'a>(mesh: &'a Mesh, params: &Params) -> Option<(&'a crate::Skeleton, &'a crate::Skin)> {
     // A skinned mesh's volumes follow its animation whichever start is chosen.
     let _ = params;
     let rig = mesh.rig()?;
@@ -68,10 +65,9 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
     if skin_of(mesh, params).is_some() {
         return Route::Surface;
     }
-    let (lo, hi) = mesh.bbox();
-    let tol = params.protrusion_tolerance((hi - lo).length());
     let pieces = pieces::pieces(mesh);
-    if pieces.iter().any(|p| !p.is_solid(tol)) {
+    let h = pieces::cell_size(&pieces, params.samples);
+    if pieces.iter().any(|p| !p.is_solid(h)) {
         return Route::Surface;
     }
     if pieces.len() == 1 {
@@ -95,7 +91,9 @@ pub fn segment(mesh: &Mesh, params: &Params, cancel: &Cancel) -> Result<Segmenta
     let t0 = std::time::Instant::now();
     let atoms = atoms(mesh, &b);
     let trace = std::env::var_os("BVSEG_TRACE").is_some();
-    if trace { eprintln!("atoms {} {:?}", atoms.len(), t0.elapsed()); }
+    if trace {
+        eprintln!("atoms {} {:?}", atoms.len(), t0.elapsed());
+    }
     cancel.check()?;
     // One cluster per bone (or one in all).
     let mut by_bone: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
@@ -140,10 +138,14 @@ pub fn segment(mesh: &Mesh, params: &Params, cancel: &Cancel) -> Result<Segmenta
         }
     }
     cancel.check()?;
-    if trace { eprintln!("split {} {:?}", clusters.len(), t0.elapsed()); }
+    if trace {
+        eprintln!("split {} {:?}", clusters.len(), t0.elapsed());
+    }
     let clusters = merge::merge(&b, &atoms, clusters, params.max_k);
     cancel.check()?;
-    if trace { eprintln!("merge {} {:?}", clusters.len(), t0.elapsed()); }
+    if trace {
+        eprintln!("merge {} {:?}", clusters.len(), t0.elapsed());
+    }
     Ok(assemble(mesh, params, &b, &atoms, clusters, skin.is_some()))
 }
 
@@ -180,8 +182,9 @@ fn atoms(mesh: &Mesh, b: &Bounder) -> Vec<Atom> {
         return (0..mesh.triangles().len() as u32).map(single).collect();
     }
     let pieces = pieces::pieces(mesh);
+    let h = pieces::cell_size(&pieces, b.params.samples);
     let whole: Vec<bool> = crate::parallel::map(&pieces, |p| {
-        p.is_solid(b.tol) && b.fit(&p.triangles, None).within(b)
+        p.is_solid(h) && b.fit(&p.triangles, None).within(b)
     });
     let mut out = Vec::new();
     for (p, whole) in pieces.iter().zip(whole) {
@@ -246,7 +249,11 @@ fn assemble(
         .zip(&pr)
         .map(|((c, v), &p)| Part {
             volume: v.clone(),
-            fraction: if total > 0.0 { v.volume() / total } else { 1.0 / k as f64 },
+            fraction: if total > 0.0 {
+                v.volume() / total
+            } else {
+                1.0 / k as f64
+            },
             samples: 0,
             ov: 0.0,
             e: 1.0,

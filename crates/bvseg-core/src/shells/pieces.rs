@@ -24,12 +24,18 @@ pub struct Piece {
 }
 
 impl Piece {
-    /// Whether the piece is a solid at the tolerance `tol` (mesh units): holes at most
-    /// [`HOLES`] of its area, and thicker than `tol` (for a slab of thickness `d`,
-    /// `2 V / A` is `d`).
-    pub fn is_solid(&self, tol: f64) -> bool {
-        self.holes <= HOLES * self.area && 2.0 * self.volume.abs() >= tol * self.area
+    /// Whether the piece is a solid a lattice of cell size `h` samples: holes at most
+    /// [`HOLES`] of its area, and at least two cells thick on average (for a slab of
+    /// thickness `d`, `2 V / A` is `d`; for a rod of radius `r`, `r`).
+    pub fn is_solid(&self, h: f64) -> bool {
+        self.holes <= HOLES * self.area && self.volume.abs() >= h * self.area
     }
+}
+
+/// The cell size of the lattice that `samples` samples of `pieces`' solid would get.
+pub fn cell_size(pieces: &[Piece], samples: usize) -> f64 {
+    let v: f64 = pieces.iter().map(|p| p.volume.abs()).sum();
+    (v / samples.max(1) as f64).cbrt()
 }
 
 /// The pieces of `mesh`: triangles sharing a vertex position belong to one piece. In the
@@ -154,7 +160,11 @@ mod tests {
         let keep: Vec<[u32; 3]> = b.triangles()[..b.triangles().len() * 3 / 4].to_vec();
         let open = Mesh::new(b.vertices().to_vec(), keep).unwrap();
         let p = pieces(&open);
-        assert!(p.iter().all(|p| !p.is_solid(0.01)), "{:?}", p.iter().map(|p| p.holes / p.area).collect::<Vec<_>>());
+        assert!(
+            p.iter().all(|p| !p.is_solid(0.01)),
+            "{:?}",
+            p.iter().map(|p| p.holes / p.area).collect::<Vec<_>>()
+        );
     }
 
     #[test]
