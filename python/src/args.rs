@@ -34,6 +34,8 @@ pub struct Given<'py> {
     pub timeout: Option<f64>,
     pub skeleton: Option<String>,
     pub sampling: Option<String>,
+    pub route: Option<String>,
+    pub per_bone: Option<Bound<'py, PyAny>>,
 }
 
 /// What a run needs besides the mesh.
@@ -121,7 +123,7 @@ fn target(name: &str) -> PyResult<Kinds> {
 }
 
 /// The keyword arguments `segment` takes besides the mesh and `progress`.
-pub const NAMES: [&str; 19] = [
+pub const NAMES: [&str; 21] = [
     "k",
     "tov",
     "max_protrusion",
@@ -141,6 +143,8 @@ pub const NAMES: [&str; 19] = [
     "timeout",
     "skeleton",
     "sampling",
+    "route",
+    "per_bone",
 ];
 
 /// A float argument (an int is taken too): `TypeError` naming the parameter otherwise.
@@ -229,6 +233,8 @@ impl<'py> Given<'py> {
                 "timeout" => g.timeout = Some(float(&key, &value)?),
                 "skeleton" => g.skeleton = Some(string(&key, &value)?),
                 "sampling" => g.sampling = Some(string(&key, &value)?),
+                "route" => g.route = Some(string(&key, &value)?),
+                "per_bone" => g.per_bone = v,
                 _ => return Err(unknown(function, &key)),
             }
         }
@@ -311,6 +317,13 @@ impl<'py> Given<'py> {
                     .map_err(|e| PyValueError::new_err(format!("sampling: {e}")))?,
                 None => d.sampling,
             },
+            route: match &self.route {
+                Some(s) => s
+                    .parse()
+                    .map_err(|e| PyValueError::new_err(format!("route: {e}")))?,
+                None => d.route,
+            },
+            per_bone: opt_size("per_bone", &self.per_bone)?,
             ..d
         };
         params
@@ -389,6 +402,8 @@ pub fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("timeout", py.None())?;
     out.set_item("skeleton", d.skeleton.to_string())?;
     out.set_item("sampling", d.sampling.to_string())?;
+    out.set_item("route", d.route.to_string())?;
+    out.set_item("per_bone", d.per_bone)?;
     Ok(out)
 }
 

@@ -185,6 +185,7 @@ def test_defaults_are_the_cores(run_cli):
     assert d["k"] is None and d["mov"] is None and d["merge"] and d["tighten"] and d["margin"] == 0
     assert d["hierarchy"] is True
     assert d["skeleton"] == "rig" and d["sampling"] == "regular"
+    assert d["route"] == "auto" and d["per_bone"] is None
     # The CLI's --help shows the same defaults.
     help_text = run_cli("segment", "--help").stdout
     assert "[default: 0.3]" in help_text and "[default: 20000]" in help_text and "[default: 96]" in help_text

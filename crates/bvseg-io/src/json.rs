@@ -375,6 +375,7 @@ mod tests {
             cell_size: 0.125,
             budget_exhausted: false,
             skeleton: None,
+            route: bvseg_core::Route::Lattice,
         }
     }
 

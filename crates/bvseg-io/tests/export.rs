@@ -83,6 +83,7 @@ fn seg() -> Segmentation {
         cell_size: 0.1,
         budget_exhausted: false,
         skeleton: None,
+        route: bvseg_core::Route::Lattice,
     }
 }
 

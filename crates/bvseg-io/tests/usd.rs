@@ -89,6 +89,7 @@ fn seg(volumes: Vec<BoundingVolume>) -> Segmentation {
         cell_size: 0.1,
         budget_exhausted: false,
         skeleton: None,
+        route: bvseg_core::Route::Lattice,
     }
 }
 

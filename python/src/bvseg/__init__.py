@@ -334,6 +334,11 @@ Keyword arguments (the command line's options; the defaults are the core's):
   ``"auto"`` (an approximate curve skeleton) or ``"none"``.
 - ``sampling`` ({DEFAULTS['sampling']!r}): ``"regular"`` or ``"adaptive"`` (a finer lattice whose
   thick inside is gathered into weighted blocks; ``--sampling``).
+- ``route`` ({DEFAULTS['route']!r}): ``"auto"``, ``"lattice"`` (partition the sampled interior:
+  the paper's method) or ``"surface"`` (clusters of triangles: open, thin or many-piece meshes
+  and skinned characters; ``--route``, docs/method.md "Two routes").
+- ``per_bone`` (3): most volumes per bone of a skinned character on the surface route; 1 is a
+  ragdoll, one volume per bone that moves triangles.
 - ``hierarchy`` ({DEFAULTS['hierarchy']}): build the bounding-volume hierarchy over the parts
   (about a sixth of a default run); only :meth:`Segmentation.to_json` carries it, so
   ``False`` suits a run written to GLB, MJCF or OBJ alone (its JSON then has an empty one).

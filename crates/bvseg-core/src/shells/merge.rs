@@ -1,6 +1,7 @@
 //! Bottom-up: two clusters become one while the one volume still keeps within the
-//! tolerance, cheapest first (the merge that adds the least volume); past the part budget,
-//! the merges that protrude least, whatever they protrude.
+//! tolerance (or, for a cluster that no volume holds within it, protrudes no more than the
+//! cluster did), cheapest first (the merge that adds the least volume); past the part
+//! budget, the merges that protrude least, whatever they protrude.
 use std::collections::BTreeMap;
 
 use super::bound::Bounder;
@@ -70,9 +71,24 @@ pub fn merge(
                 .map(|&(i, j)| (cache[&(ids[i], ids[j])].fit.protrusion(b), i, j))
                 .min_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))))
         } else {
-            ranked
-                .into_iter()
-                .find(|&(_, i, j)| cache[&(ids[i], ids[j])].fit.within(b))
+            // A cluster already out of tolerance (a triangle no volume holds within it) may
+            // take neighbours that do not make it protrude more.
+            let limit = |c: &Cluster| {
+                if c.fit.within(b) {
+                    b.tol
+                } else {
+                    c.fit.protrusion(b)
+                }
+            };
+            ranked.into_iter().find(|&(_, i, j)| {
+                let m = &cache[&(ids[i], ids[j])].fit;
+                let l = limit(&clusters[i]).max(limit(&clusters[j]));
+                if l <= b.tol {
+                    m.within(b)
+                } else {
+                    m.protrusion(b) <= l
+                }
+            })
         };
         let Some((_, i, j)) = best else {
             return clusters;

@@ -66,8 +66,7 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
         return Route::Surface;
     }
     let pieces = pieces::pieces(mesh);
-    let h = pieces::cell_size(&pieces, params.samples);
-    if pieces.iter().any(|p| !p.is_solid(h)) {
+    if pieces.iter().any(|p| !p.is_closed()) {
         return Route::Surface;
     }
     if pieces.len() == 1 {

@@ -28,7 +28,12 @@ impl Piece {
     /// [`HOLES`] of its area, and at least two cells thick on average (for a slab of
     /// thickness `d`, `2 V / A` is `d`; for a rod of radius `r`, `r`).
     pub fn is_solid(&self, h: f64) -> bool {
-        self.holes <= HOLES * self.area && self.volume.abs() >= h * self.area
+        self.is_closed() && self.volume.abs() >= h * self.area
+    }
+
+    /// Whether the piece is closed up to holes of at most [`HOLES`] of its area.
+    pub fn is_closed(&self) -> bool {
+        self.holes <= HOLES * self.area
     }
 }
 
