@@ -110,6 +110,10 @@ fn a_character_per_bone_1_is_a_ragdoll_that_follows_every_pose() {
     posed::assert_enclosed_at_rest_and_in_every_pose(&loaded.mesh, &seg, "per bone 1");
 
     let seg = segment(&loaded.mesh, &Params::default()).unwrap();
-    assert!(seg.parts.len() > bones && seg.parts.len() <= 3 * bones, "{}", seg.parts.len());
+    assert!(
+        seg.parts.len() > bones && seg.parts.len() <= 3 * bones,
+        "{}",
+        seg.parts.len()
+    );
     posed::assert_enclosed_at_rest_and_in_every_pose(&loaded.mesh, &seg, "default");
 }

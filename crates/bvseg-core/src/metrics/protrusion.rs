@@ -56,17 +56,33 @@ pub fn protrusion(
 
 /// Whether [`surface_protrusion`] of `v` (alone) exceeds `tol`: most volumes that do show it
 /// at a boundary sample, found without measuring the rest.
-pub fn surface_protrusion_exceeds(v: &BoundingVolume, surface: &SurfaceDistance, tol: f64) -> bool {
+pub fn surface_protrusion_exceeds(
+    v: &BoundingVolume,
+    surface: &SurfaceDistance,
+    tol: f64,
+    points: &[DVec3],
+    cap: u64,
+) -> (bool, u64) {
     let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
     let spent = std::cell::Cell::new(0u64);
     let (samples, _) = boundary_samples(v);
-    let over = samples.iter().any(|&t| {
-        surface
-            .distance_within(v.world(t), (f64::INFINITY, tol), &near, &spent, u64::MAX)
-            .is_some_and(|d| d > tol)
-    });
+    let mut over = false;
+    for &t in &samples {
+        match surface.distance_within(v.world(t), (f64::INFINITY, tol), &near, &spent, cap) {
+            Some(d) if d > tol => {
+                over = true;
+                break;
+            }
+            Some(_) => {}
+            None => break,
+        }
+    }
     crate::work::add(spent.get() as usize);
-    over || surface_protrusion(v, surface, &[]) > tol
+    if over {
+        return (true, spent.get());
+    }
+    let (p, more) = surface_protrusion(v, surface, &[], points, cap);
+    (p > tol, spent.get() + more)
 }
 
 /// Whether a point is outside the sampled solid (in a lattice cell without a sample).
@@ -78,17 +94,22 @@ fn outside(grid: &Grid) -> impl Fn(DVec3) -> bool + '_ {
 }
 
 /// The protrusion of `v` over a surface with no inside (the surface route of
-/// [`crate::shells`]): the largest distance to the surface of the points of `v`'s boundary
-/// outside every volume of `others`, wherever they are, as the judges measure it.
+/// `crate::shells`): the largest distance to the surface of the points of `v`'s boundary
+/// outside every volume of `others`, wherever they are, as the judges measure it. Within the
+/// bound `cap` on the search (the lattice route has one too: (a fan of huge overlapping
+/// triangles makes every query visit them all); beyond it, an upper bound: the distance to
+/// the nearest of `points`, which lie on the surface. Returns the figure and the work done.
 pub fn surface_protrusion(
     v: &BoundingVolume,
     surface: &SurfaceDistance,
     others: &[BoundingVolume],
-) -> f64 {
+    points: &[DVec3],
+    cap: u64,
+) -> (f64, u64) {
     let near = std::cell::Cell::new(super::surface::NO_TRIANGLE);
     let spent = std::cell::Cell::new(0u64);
     let last = std::cell::Cell::new(None::<(DVec3, f64)>);
-    let value = protrusion_by(
+    let exact = protrusion_by(
         v,
         |_| true,
         others,
@@ -96,13 +117,23 @@ pub fn surface_protrusion(
             let bound = last
                 .get()
                 .map_or(f64::INFINITY, |(q, d)| d + (p - q).length());
-            let d = surface.distance_within(p, (bound, floor), &near, &spent, u64::MAX)?;
+            let d = surface.distance_within(p, (bound, floor), &near, &spent, cap)?;
             last.set(Some((p, d)));
             Some(d)
         },
     );
     crate::work::add(spent.get() as usize);
-    value.unwrap_or(0.0)
+    let value = exact.unwrap_or_else(|| {
+        let nearest = |p: DVec3| {
+            points
+                .iter()
+                .map(|&q| (q - p).length_squared())
+                .fold(f64::INFINITY, math::min)
+                .sqrt()
+        };
+        protrusion_by(v, |_| true, others, |p, _| Some(nearest(p))).unwrap_or(0.0)
+    });
+    (value, spent.get())
 }
 
 /// [`protrusion`] within a bound on the search's work: each fit may visit `cap` nodes and

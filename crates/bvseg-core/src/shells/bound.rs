@@ -1,6 +1,15 @@
 //! A cluster's volume: of the run's kinds, the smallest that holds its triangles (in every
 //! pose, for a skinned mesh), and how far it reaches past the surface.
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::{DMat4, DVec3};
+
+use crate::refine::budget::DISTANCE_PER_SAMPLE;
+
+/// Nodes and triangles of the surface's tree one protrusion may visit. A cluster of a
+/// low-poly asset needs a few thousand; a fan of huge overlapping triangles makes every query
+/// visit them all. (A tenth of the lattice route's: its fits are far fewer.)
+pub const DISTANCE_PER_FIT: u64 = crate::refine::budget::DISTANCE_PER_FIT / 10;
 
 use crate::bounding::{self, hull::hull_points};
 use crate::math;
@@ -37,17 +46,36 @@ impl Fit {
     /// Whether the volume keeps within the tolerance (cheaper than its protrusion when it
     /// does not).
     pub fn within(&self, b: &Bounder) -> bool {
+        self.within_capped(b, b.cap(), true)
+    }
+
+    /// [`Fit::within`] for a search that runs in parallel with others: with a fit's cap, not
+    /// counted against the budget (see [`Bounder::counted`]).
+    pub fn within_in_parallel(&self, b: &Bounder) -> bool {
+        self.within_capped(b, DISTANCE_PER_FIT, false)
+    }
+
+    fn within_capped(&self, b: &Bounder, cap: u64, count: bool) -> bool {
         match self.protrusion.get() {
             Some(&p) => p <= b.tol,
-            None => !surface_protrusion_exceeds(&self.volume, &b.surface, b.tol),
+            None => {
+                let (over, spent) =
+                    surface_protrusion_exceeds(&self.volume, &b.surface, b.tol, &self.hull, cap);
+                if count {
+                    b.spend(spent);
+                }
+                !over
+            }
         }
     }
 
     /// How far the volume's boundary reaches from the surface (mesh units), alone.
     pub fn protrusion(&self, b: &Bounder) -> f64 {
-        *self
-            .protrusion
-            .get_or_init(|| surface_protrusion(&self.volume, &b.surface, &[]))
+        *self.protrusion.get_or_init(|| {
+            let (p, spent) = surface_protrusion(&self.volume, &b.surface, &[], &self.hull, b.cap());
+            b.spend(spent);
+            p
+        })
     }
 }
 
@@ -61,6 +89,15 @@ pub struct Bounder<'a> {
     pub diagonal: f64,
     /// The skin and skeleton, when the volumes follow bones.
     pub skin: Option<(&'a Skeleton, &'a Skin)>,
+    /// The run's bound on the protrusions' searches (as the lattice route's, per sample the
+    /// run would have had), and what they spent. Beyond it a protrusion is the distance to
+    /// the nearest of the fit's points, an upper bound: no tolerance is met by mistake.
+    budget: u64,
+    spent: AtomicU64,
+    /// Whether the searches count against the budget: only where they run in a fixed order
+    /// (the split and the merge), so that results do not depend on the thread count; the
+    /// searches run in parallel have only each fit's own cap.
+    counted: bool,
 }
 
 impl<'a> Bounder<'a> {
@@ -74,6 +111,43 @@ impl<'a> Bounder<'a> {
             tol: params.protrusion_tolerance(diagonal),
             diagonal,
             skin,
+            budget: DISTANCE_PER_SAMPLE * params.samples as u64,
+            spent: AtomicU64::new(0),
+            counted: false,
+        }
+    }
+
+    /// This bounder with its searches counted against the budget (see [`Bounder::counted`]).
+    pub fn counting(mut self) -> Self {
+        self.counted = true;
+        self
+    }
+
+    /// The cap on the next search: a fit's, while the budget lasts.
+    fn cap(&self) -> u64 {
+        if self.counted && self.spent.load(Ordering::Relaxed) > self.budget {
+            0
+        } else {
+            DISTANCE_PER_FIT
+        }
+    }
+
+    /// The protrusion of `v` on the union's boundary (its points inside `others` do not
+    /// count), counted against the budget.
+    pub fn union_protrusion(
+        &self,
+        v: &BoundingVolume,
+        others: &[BoundingVolume],
+        points: &[DVec3],
+    ) -> f64 {
+        let (p, spent) = surface_protrusion(v, &self.surface, others, points, self.cap());
+        self.spend(spent);
+        p
+    }
+
+    fn spend(&self, n: u64) {
+        if self.counted {
+            self.spent.fetch_add(n, Ordering::Relaxed);
         }
     }
 

@@ -26,7 +26,6 @@ use glam::DVec3;
 use crate::error::Error;
 use crate::hierarchy;
 use crate::mesh::Mesh;
-use crate::metrics::surface_protrusion;
 use crate::params::{Params, Route};
 use crate::result::{Metrics, Part, Segmentation, Step, StepKind};
 use crate::Cancel;
@@ -75,7 +74,9 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
     // Several solid pieces: the surface route when each is one volume within the tolerance
     // (a building of boxes), the lattice when some piece needs a partition of its own.
     let b = Bounder::new(mesh, params, None);
-    let fits = crate::parallel::map(&pieces, |p| b.fit(&p.triangles, None).within(&b));
+    let fits = crate::parallel::map(&pieces, |p| {
+        b.fit(&p.triangles, None).within_in_parallel(&b)
+    });
     if fits.iter().all(|&f| f) {
         Route::Surface
     } else {
@@ -86,7 +87,7 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
 /// The surface route's segmentation of `mesh` (see the module's docs).
 pub fn segment(mesh: &Mesh, params: &Params, cancel: &Cancel) -> Result<Segmentation, Error> {
     let skin = skin_of(mesh, params);
-    let b = Bounder::new(mesh, params, skin);
+    let b = Bounder::new(mesh, params, skin).counting();
     let t0 = std::time::Instant::now();
     let atoms = atoms(mesh, &b);
     let trace = std::env::var_os("BVSEG_TRACE").is_some();
@@ -183,7 +184,7 @@ fn atoms(mesh: &Mesh, b: &Bounder) -> Vec<Atom> {
     let pieces = pieces::pieces(mesh);
     let h = pieces::cell_size(&pieces, b.params.samples);
     let whole: Vec<bool> = crate::parallel::map(&pieces, |p| {
-        p.is_solid(h) && b.fit(&p.triangles, None).within(b)
+        p.is_solid(h) && b.fit(&p.triangles, None).within_in_parallel(b)
     });
     let mut out = Vec::new();
     for (p, whole) in pieces.iter().zip(whole) {
@@ -225,16 +226,18 @@ fn assemble(
     let total: f64 = volumes.iter().map(|v| v.volume()).sum();
     // Each part's protrusion on the union's boundary: its points inside another volume do
     // not count.
-    let ids: Vec<usize> = (0..k).collect();
-    let pr = crate::parallel::map(&ids, |&i| {
-        let others: Vec<_> = volumes
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| j != i)
-            .map(|(_, v)| v.clone())
-            .collect();
-        surface_protrusion(&volumes[i], &b.surface, &others)
-    });
+    // In order, counted against the run's bound on the searches (see `bound::Bounder`).
+    let pr: Vec<f64> = (0..k)
+        .map(|i| {
+            let others: Vec<_> = volumes
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, v)| v.clone())
+                .collect();
+            b.union_protrusion(&volumes[i], &others, &clusters[i].fit.hull)
+        })
+        .collect();
     let protrusion = pr.iter().copied().fold(0.0, f64::max);
     let mut triangle_parts = vec![0u32; mesh.triangles().len()];
     for (i, c) in clusters.iter().enumerate() {
