@@ -2,7 +2,7 @@
 // Tests state their expectations by panicking.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use bvseg::shapes::capsule;
-use bvseg::{segment, Joint, Mesh, Params, Pose, Rig, Skeleton, SkeletonMode, Skin};
+use bvseg::{segment, Joint, Mesh, Params, Pose, Rig, Route, Skeleton, SkeletonMode, Skin};
 use glam::{DMat4, DVec3};
 
 /// An arm along x from -1 to 1: the upper arm's joint at -1, the elbow at 0, the hand at 1.
@@ -129,6 +129,9 @@ fn the_skeleton_seeds_one_part_per_link_and_none_ignores_it() {
         tov: 10.0,
         max_protrusion: 1.0,
         merge: false,
+        // The seeding is the lattice route's (a skinned mesh takes the surface route by
+        // default, which starts from one cluster per bone whatever the mode).
+        route: Route::Lattice,
         ..Params::default()
     };
     let seg = segment(&mesh, &fixed(SkeletonMode::Rig)).unwrap();

@@ -95,7 +95,13 @@ fn controls_change_the_run_and_the_parts_table_highlights() {
 
     h.get_by_label("Run").click();
     h.step();
-    assert_eq!(*h.state().status(), Status::Running);
+    // Started: a run of 4000 samples in the background may already be over on an idle
+    // machine.
+    assert!(
+        matches!(*h.state().status(), Status::Running | Status::Done),
+        "{:?}",
+        h.state().status()
+    );
     run_to_end(&mut h);
     assert_eq!(*h.state().status(), Status::Done);
     let res = h.state().result().expect("a result");

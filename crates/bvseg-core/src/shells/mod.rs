@@ -68,11 +68,12 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
     if pieces.iter().any(|p| !p.is_closed()) {
         return Route::Surface;
     }
-    if pieces.len() == 1 {
+    // Closed pieces, one of them too thin for the lattice: the surface route when each is one
+    // volume within the tolerance (a building of thin boxes), the lattice otherwise.
+    let h = pieces::cell_size(&pieces, params.samples);
+    if pieces.len() == 1 || pieces.iter().all(|p| p.is_solid(h)) {
         return Route::Lattice;
     }
-    // Several solid pieces: the surface route when each is one volume within the tolerance
-    // (a building of boxes), the lattice when some piece needs a partition of its own.
     let b = Bounder::new(mesh, params, None);
     let fits = crate::parallel::map(&pieces, |p| {
         b.fit(&p.triangles, None).within_in_parallel(&b)
