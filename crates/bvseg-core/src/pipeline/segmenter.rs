@@ -26,6 +26,8 @@ pub struct Segmenter {
     run: Run,
 }
 
+// One per run: the size of the surface variant's result does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Run {
     Lattice(Box<Lattice>),
     /// The surface route is computed whole by [`Segmenter::new`] (it is fast: no lattice);

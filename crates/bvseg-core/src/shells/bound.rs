@@ -21,7 +21,7 @@ use crate::volume::BoundingVolume;
 
 /// Smallest radius of a fitted volume, relative to the diagonal: a flat cluster (a quad, a
 /// leaf card) gets a box this thick rather than a degenerate one.
-const MIN_R_REL: f64 = 1e-4;
+pub const MIN_R_REL: f64 = 1e-4;
 
 /// A corner in a pose that lies this close (relative to the diagonal) to the last sample of
 /// it kept is left out of the fit, and the volume grown by that much instead: most corners
@@ -162,7 +162,7 @@ impl<'a> Bounder<'a> {
     pub fn fit_both(&self, a: &Fit, b: &Fit) -> Fit {
         let mut points = a.hull.clone();
         points.extend_from_slice(&b.hull);
-        self.fit_points(&points, a.margin.max(b.margin))
+        self.fit_points(&points, math::max(a.margin, b.margin))
     }
 
     fn fit_points(&self, points: &[DVec3], margin: f64) -> Fit {
@@ -172,19 +172,7 @@ impl<'a> Bounder<'a> {
         } else {
             hull
         };
-        let min_r = MIN_R_REL * self.diagonal;
-        let volume = self
-            .params
-            .kinds
-            .shapes()
-            .map(|s| {
-                bounding::fit(s, &hull, min_r, self.params.max_hull_vertices)
-                    .scaled_to_contain(hull.iter().copied())
-                    .grown(margin)
-            })
-            .filter(|v| v.volume().is_finite())
-            .min_by(|a, b| a.volume().total_cmp(&b.volume()))
-            .expect("a run has at least one kind");
+        let volume = smallest(self.params, &hull, MIN_R_REL * self.diagonal).grown(margin);
         Fit {
             volume,
             hull,
@@ -261,4 +249,20 @@ impl<'a> Bounder<'a> {
         let margin = 0.5 * worst + if left_out { keep } else { 0.0 };
         (points, margin)
     }
+}
+
+/// Of `params`' kinds, the smallest volume that holds `points` (no radius below `min_r`).
+pub fn smallest(params: &Params, points: &[DVec3], min_r: f64) -> BoundingVolume {
+    let fit = |s| {
+        bounding::fit(s, points, min_r, params.max_hull_vertices)
+            .scaled_to_contain(points.iter().copied())
+    };
+    params
+        .kinds
+        .shapes()
+        .map(fit)
+        .filter(|v| v.volume().is_finite())
+        .min_by(|a, b| a.volume().total_cmp(&b.volume()))
+        // Params::validate refuses an empty set of kinds; a box whatever happens.
+        .unwrap_or_else(|| fit(crate::volume::Shape::Obb))
 }

@@ -82,7 +82,7 @@ pub fn merge(
             };
             ranked.into_iter().find(|&(_, i, j)| {
                 let m = &cache[&(ids[i], ids[j])].fit;
-                let l = limit(&clusters[i]).max(limit(&clusters[j]));
+                let l = crate::math::max(limit(&clusters[i]), limit(&clusters[j]));
                 if l <= b.tol {
                     m.within(b)
                 } else {
@@ -93,7 +93,10 @@ pub fn merge(
         let Some((_, i, j)) = best else {
             return clusters;
         };
-        let merged = cache.remove(&(ids[i], ids[j])).expect("fitted above");
+        let Some(merged) = cache.remove(&(ids[i], ids[j])) else {
+            // Every pair ranked was fitted above.
+            return clusters;
+        };
         // j > i: remove j first.
         clusters.remove(j);
         ids.remove(j);

@@ -44,10 +44,8 @@ pub struct Atom {
     pub bone: Option<usize>,
 }
 
-/// The skeleton and skin the volumes follow, when the run uses them.
-fn skin_of<'a>(mesh: &'a Mesh, params: &Params) -> Option<(&'a crate::Skeleton, &'a crate::Skin)> {
-    // A skinned mesh's volumes follow its animation whichever start is chosen.
-    let _ = params;
+/// The skeleton and skin the volumes follow: a skinned mesh's, whichever start is chosen.
+fn skin_of(mesh: &Mesh) -> Option<(&crate::Skeleton, &crate::Skin)> {
     let rig = mesh.rig()?;
     Some((&rig.skeleton, rig.skin.as_ref()?))
 }
@@ -61,7 +59,7 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
     if params.k.is_some() {
         return Route::Lattice;
     }
-    if skin_of(mesh, params).is_some() {
+    if skin_of(mesh).is_some() {
         return Route::Surface;
     }
     let pieces = pieces::pieces(mesh);
@@ -87,14 +85,9 @@ pub fn route(mesh: &Mesh, params: &Params) -> Route {
 
 /// The surface route's segmentation of `mesh` (see the module's docs).
 pub fn segment(mesh: &Mesh, params: &Params, cancel: &Cancel) -> Result<Segmentation, Error> {
-    let skin = skin_of(mesh, params);
+    let skin = skin_of(mesh);
     let b = Bounder::new(mesh, params, skin).counting();
-    let t0 = std::time::Instant::now();
     let atoms = atoms(mesh, &b);
-    let trace = std::env::var_os("BVSEG_TRACE").is_some();
-    if trace {
-        eprintln!("atoms {} {:?}", atoms.len(), t0.elapsed());
-    }
     cancel.check()?;
     // One cluster per bone (or one in all).
     let mut by_bone: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
@@ -139,14 +132,8 @@ pub fn segment(mesh: &Mesh, params: &Params, cancel: &Cancel) -> Result<Segmenta
         }
     }
     cancel.check()?;
-    if trace {
-        eprintln!("split {} {:?}", clusters.len(), t0.elapsed());
-    }
     let clusters = merge::merge(&b, &atoms, clusters, params.max_k);
     cancel.check()?;
-    if trace {
-        eprintln!("merge {} {:?}", clusters.len(), t0.elapsed());
-    }
     Ok(assemble(mesh, params, &b, &atoms, clusters, skin.is_some()))
 }
 
@@ -196,7 +183,7 @@ fn atoms(mesh: &Mesh, b: &Bounder) -> Vec<Atom> {
                 .iter()
                 .map(|&t| area_of(t) * centroid_of(t))
                 .sum::<DVec3>()
-                / area.max(f64::MIN_POSITIVE);
+                / crate::math::max(area, f64::MIN_POSITIVE);
             out.push(Atom {
                 triangles: p.triangles.clone(),
                 centroid,
@@ -239,7 +226,7 @@ fn assemble(
             b.union_protrusion(&volumes[i], &others, &clusters[i].fit.hull)
         })
         .collect();
-    let protrusion = pr.iter().copied().fold(0.0, f64::max);
+    let protrusion = pr.iter().copied().fold(0.0, crate::math::max);
     let mut triangle_parts = vec![0u32; mesh.triangles().len()];
     for (i, c) in clusters.iter().enumerate() {
         for t in split::triangles(atoms, &c.atoms) {
@@ -282,18 +269,8 @@ fn assemble(
         }
         touching.sort_unstable();
         touching.dedup();
-        let min_r = 1e-4 * b.diagonal;
         hierarchy::build(hulls, &volumes, &touching, |p| {
-            params
-                .kinds
-                .shapes()
-                .map(|s| {
-                    crate::bounding::fit(s, p, min_r, params.max_hull_vertices)
-                        .scaled_to_contain(p.iter().copied())
-                })
-                .min_by(|a, c| a.volume().total_cmp(&c.volume()))
-                .expect("a run has at least one kind")
-                .grown(params.margin)
+            bound::smallest(params, p, bound::MIN_R_REL * b.diagonal).grown(params.margin)
         })
     } else {
         Vec::new()
@@ -315,7 +292,7 @@ fn assemble(
             tov: 0.0,
             mov: 0.0,
             protrusion,
-            protrusion_rel: protrusion / b.diagonal.max(f64::MIN_POSITIVE),
+            protrusion_rel: protrusion / crate::math::max(b.diagonal, f64::MIN_POSITIVE),
             diagonal: b.diagonal,
             samples: 0,
         },
