@@ -177,8 +177,12 @@ pub fn unmet_message(seg: &Segmentation, params: &Params) -> (String, String) {
     } else if mov_only {
         "flat ends and pointed tips keep MOV up whatever k (docs/method.md, \"What MOV can \
          reach\"); raise --mov or leave it out"
+    } else if m.k < params.max_k {
+        "splitting stopped paying: the last splits did not bring the missed figures down, so \
+         more parts would not either; a finer lattice (--samples), hulls (--bv with hull) or \
+         looser --tov or --max-protrusion may"
     } else {
-        "raise --max-k or --samples, or loosen --tov or --max-protrusion"
+        "the part budget ran out: raise --max-k, or loosen --tov or --max-protrusion"
     };
     (what, hint.to_owned())
 }
@@ -321,6 +325,39 @@ mod tests {
     use super::*;
     use crate::tests::parse_segment as parse;
     use bvseg_core::{Kinds, Shape};
+
+    #[test]
+    fn the_hint_says_what_ended_the_run() {
+        // Out of parts: a torus in one part.
+        let torus = bvseg_core::shapes::torus(glam::DVec3::ZERO, 2.0, 0.5, 24);
+        let params = Params {
+            samples: 2000,
+            max_k: 1,
+            ..Params::default()
+        };
+        let seg = bvseg_core::segment(&torus, &params).unwrap();
+        assert_eq!(seg.tolerances_met(&params), Some(false));
+        assert!(unmet_message(&seg, &params)
+            .1
+            .contains("part budget ran out"));
+        // A lone right triangle: no box holds it within the tolerance, and it cannot be cut.
+        let v = vec![
+            glam::DVec3::ZERO,
+            glam::DVec3::new(1.0, 0.0, 0.0),
+            glam::DVec3::new(0.0, 1.0, 0.0),
+        ];
+        let tri = bvseg_core::Mesh::new(v, vec![[0, 1, 2]]).unwrap();
+        let params = Params::default();
+        let seg = bvseg_core::segment(&tri, &params).unwrap();
+        assert_eq!(seg.route, bvseg_core::Route::Surface);
+        assert_eq!(seg.tolerances_met(&params), Some(false));
+        let (what, hint) = unmet_message(&seg, &params);
+        assert!(
+            what.contains("protrusion") && !what.contains("TOV"),
+            "{what}"
+        );
+        assert!(hint.contains("single triangles"), "{hint}");
+    }
 
     #[test]
     fn defaults_come_from_the_core() {
