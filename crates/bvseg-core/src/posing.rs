@@ -64,61 +64,9 @@ pub fn posed_volumes(
         if tris[i].is_empty() || skin.poses.is_empty() {
             return rest.clone();
         }
-        // Each posed corner with its rest position (that of the mesh vertex it was welded
-        // into), which the rest hull holds.
-        let mut corners: Vec<(u32, DVec3)> = tris[i]
-            .iter()
-            .flat_map(|&t| {
-                let rest = mesh.triangles()[t as usize];
-                let posed = skin.corners[t as usize];
-                (0..3).map(move |c| (posed[c], rest[c]))
-            })
-            .map(|(c, v)| (c, mesh.vertices()[v as usize]))
-            .collect();
-        corners.sort_unstable_by_key(|c| c.0);
-        corners.dedup_by_key(|c| c.0);
-        let back: Vec<DMat4> = skin
-            .poses
-            .iter()
-            .map(|p| skeleton.joints[b].rest * p.joints[b].inverse())
-            .collect();
+        let (moved, margin) = carried_back(mesh, skeleton, skin, b, &tris[i], keep);
         let mut points = cur.fits[i].hull.clone();
-        let mut last: Vec<DVec3> = corners.iter().map(|c| c.1).collect();
-        let mut left_out = false;
-        // The corners carried back in this pose and the two before it, for the estimate of
-        // how far they stray between samples (see the module's docs).
-        let n = corners.len();
-        let (mut now, mut before, mut before2) = (
-            vec![DVec3::ZERO; n],
-            vec![DVec3::ZERO; n],
-            vec![DVec3::ZERO; n],
-        );
-        let mut worst = 0.0f64;
-        for (k, (p, m)) in skin.poses.iter().zip(&back).enumerate() {
-            for ((&(c, _), last), x) in corners.iter().zip(&mut last).zip(&mut now) {
-                *x = m.transform_point3(p.vertices[c as usize]);
-                if x.distance_squared(*last) > keep * keep {
-                    points.push(*x);
-                    *last = *x;
-                } else {
-                    left_out = true;
-                }
-            }
-            let poses = &skin.poses;
-            if k >= 2
-                && (poses[k - 2].animation, poses[k - 1].animation) == (p.animation, p.animation)
-            {
-                for c in 0..n {
-                    worst = math::max(worst, segment_distance(before[c], before2[c], now[c]));
-                }
-            }
-            std::mem::swap(&mut before2, &mut before);
-            std::mem::swap(&mut before, &mut now);
-        }
-        let mut margin = 0.5 * worst;
-        if left_out {
-            margin += keep;
-        }
+        points.extend(moved);
         let hull = hull_points(&points);
         let v = ctx.fitter.fit_points(&ctx.solid, &hull);
         if margin > 0.0 {
@@ -129,7 +77,77 @@ pub fn posed_volumes(
     })
 }
 
+/// The corners of triangles `tris` in every pose of `skin`, carried back into the rest pose by
+/// bone `b` (`G(rest) G(t)⁻¹ x(t)`; see the module's docs), leaving out a corner within
+/// `keep` of the last of its samples kept, and the margin to grow a volume of them by: the
+/// motion between sampled poses (half the largest miss of a chord of three consecutive poses)
+/// plus `keep` when a sample was left out. Shared by both routes.
+pub(crate) fn carried_back(
+    mesh: &crate::Mesh,
+    skeleton: &Skeleton,
+    skin: &Skin,
+    b: usize,
+    tris: &[u32],
+    keep: f64,
+) -> (Vec<DVec3>, f64) {
+    let mut points = Vec::new();
+    // Each posed corner with its rest position (that of the mesh vertex it was welded
+    // into), which the rest hull holds.
+    let mut corners: Vec<(u32, DVec3)> = tris
+        .iter()
+        .flat_map(|&t| {
+            let rest = mesh.triangles()[t as usize];
+            let posed = skin.corners[t as usize];
+            (0..3).map(move |c| (posed[c], rest[c]))
+        })
+        .map(|(c, v)| (c, mesh.vertices()[v as usize]))
+        .collect();
+    corners.sort_unstable_by_key(|c| c.0);
+    corners.dedup_by_key(|c| c.0);
+    let back: Vec<DMat4> = skin
+        .poses
+        .iter()
+        .map(|p| skeleton.joints[b].rest * p.joints[b].inverse())
+        .collect();
+    let mut last: Vec<DVec3> = corners.iter().map(|c| c.1).collect();
+    let mut left_out = false;
+    // The corners carried back in this pose and the two before it, for the estimate of
+    // how far they stray between samples (see the module's docs).
+    let n = corners.len();
+    let (mut now, mut before, mut before2) = (
+        vec![DVec3::ZERO; n],
+        vec![DVec3::ZERO; n],
+        vec![DVec3::ZERO; n],
+    );
+    let mut worst = 0.0f64;
+    for (k, (p, m)) in skin.poses.iter().zip(&back).enumerate() {
+        for ((&(c, _), last), x) in corners.iter().zip(&mut last).zip(&mut now) {
+            *x = m.transform_point3(p.vertices[c as usize]);
+            if x.distance_squared(*last) > keep * keep {
+                points.push(*x);
+                *last = *x;
+            } else {
+                left_out = true;
+            }
+        }
+        let poses = &skin.poses;
+        if k >= 2 && (poses[k - 2].animation, poses[k - 1].animation) == (p.animation, p.animation)
+        {
+            for c in 0..n {
+                worst = math::max(worst, segment_distance(before[c], before2[c], now[c]));
+            }
+        }
+        std::mem::swap(&mut before2, &mut before);
+        std::mem::swap(&mut before, &mut now);
+    }
+    let mut margin = 0.5 * worst;
+    if left_out {
+        margin += keep;
+    }
+    (points, margin)
+}
+
 /// Distance from `p` to the segment `[a, b]`.
-pub(crate) fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     (p - closest_on_segment(p, a, b)).length()
 }

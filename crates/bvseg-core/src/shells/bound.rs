@@ -2,7 +2,7 @@
 //! pose, for a skinned mesh), and how far it reaches past the surface.
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use glam::{DMat4, DVec3};
+use glam::DVec3;
 
 use crate::refine::budget::DISTANCE_PER_SAMPLE;
 
@@ -202,51 +202,9 @@ impl<'a> Bounder<'a> {
         if skin.poses.is_empty() {
             return (points, 0.0);
         }
-        let mut corners: Vec<(u32, DVec3)> = tris
-            .iter()
-            .flat_map(|&t| {
-                let r = mesh.corners(t as usize);
-                let p = skin.corners[t as usize];
-                (0..3).map(move |c| (p[c], r[c]))
-            })
-            .collect();
-        corners.sort_unstable_by_key(|c| c.0);
-        corners.dedup_by_key(|c| c.0);
-        let keep = KEEP_REL * self.diagonal;
-        let n = corners.len();
-        let mut last: Vec<DVec3> = corners.iter().map(|c| c.1).collect();
-        let (mut now, mut before, mut before2) = (
-            vec![DVec3::ZERO; n],
-            vec![DVec3::ZERO; n],
-            vec![DVec3::ZERO; n],
-        );
-        let (mut worst, mut left_out) = (0.0f64, false);
-        for (k, p) in skin.poses.iter().enumerate() {
-            let back: DMat4 = skeleton.joints[b].rest * p.joints[b].inverse();
-            for ((&(c, _), last), x) in corners.iter().zip(&mut last).zip(&mut now) {
-                *x = back.transform_point3(p.vertices[c as usize]);
-                if x.distance_squared(*last) > keep * keep {
-                    points.push(*x);
-                    *last = *x;
-                } else {
-                    left_out = true;
-                }
-            }
-            let poses = &skin.poses;
-            if k >= 2
-                && (poses[k - 2].animation, poses[k - 1].animation) == (p.animation, p.animation)
-            {
-                for c in 0..n {
-                    worst = math::max(
-                        worst,
-                        crate::posing::segment_distance(before[c], before2[c], now[c]),
-                    );
-                }
-            }
-            std::mem::swap(&mut before2, &mut before);
-            std::mem::swap(&mut before, &mut now);
-        }
-        let margin = 0.5 * worst + if left_out { keep } else { 0.0 };
+        let (moved, margin) =
+            crate::posing::carried_back(mesh, skeleton, skin, b, tris, KEEP_REL * self.diagonal);
+        points.extend(moved);
         (points, margin)
     }
 }
