@@ -2,44 +2,17 @@
 //! volume moves with a bone and encloses its triangles in every sampled pose.
 // Tests state their expectations by panicking.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use bvseg::{segment, Mesh, Params, Segmentation};
+#[path = "support/posed.rs"]
+mod posed;
+
+use bvseg::{segment, Params};
 use bvseg_io::{load, LoadOptions};
+use posed::assert_enclosed_at_rest_and_in_every_pose;
 
 const CESIUM_MAN: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/assets/characters/CesiumMan.glb"
 );
-
-/// Every triangle's corners lie in its part's volume at rest (the mesh itself) and, posed by
-/// the file's animations, in that volume moved by the part's bone: G(t) * G(rest)^-1.
-fn assert_enclosed_at_rest_and_in_every_pose(mesh: &Mesh, seg: &Segmentation, what: &str) {
-    let skin = mesh.rig().and_then(|r| r.skin.as_ref()).expect("a skin");
-    let skeleton = seg.skeleton.as_ref().expect("the parts' skeleton");
-    for (t, tri) in mesh.triangles().iter().enumerate() {
-        let part = &seg.parts[seg.triangle_parts[t] as usize];
-        for &v in tri {
-            assert!(
-                part.volume.contains(mesh.vertices()[v as usize]),
-                "{what}: triangle {t} at rest"
-            );
-        }
-    }
-    for pose in &skin.poses {
-        for (t, corners) in skin.corners.iter().enumerate() {
-            let part = &seg.parts[seg.triangle_parts[t] as usize];
-            let b = part.bone.unwrap();
-            let back = skeleton.joints[b].rest * pose.joints[b].inverse();
-            for &c in corners {
-                let p = back.transform_point3(pose.vertices[c as usize]);
-                assert!(
-                    part.volume.contains(p),
-                    "{what}: triangle {t} leaves its volume at t = {}",
-                    pose.time
-                );
-            }
-        }
-    }
-}
 
 #[test]
 fn cesium_man_volumes_follow_its_walk() {

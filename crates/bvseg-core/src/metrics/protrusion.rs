@@ -124,14 +124,7 @@ pub fn surface_protrusion(
     );
     crate::work::add(spent.get() as usize);
     let value = exact.unwrap_or_else(|| {
-        let nearest = |p: DVec3| {
-            points
-                .iter()
-                .map(|&q| (q - p).length_squared())
-                .fold(f64::INFINITY, math::min)
-                .sqrt()
-        };
-        protrusion_by(v, |_| true, others, |p, _| Some(nearest(p))).unwrap_or(0.0)
+        protrusion_by(v, |_| true, others, |p, _| Some(nearest(points, p))).unwrap_or(0.0)
     });
     (value, spent.get())
 }
@@ -177,14 +170,17 @@ pub fn protrusion_bound(
     others: &[BoundingVolume],
     points: &[DVec3],
 ) -> f64 {
-    let nearest = |p: DVec3| {
-        points
-            .iter()
-            .map(|&q| (q - p).length_squared())
-            .fold(f64::INFINITY, math::min)
-            .sqrt()
-    };
-    protrusion_by(v, outside(grid), others, |p, _| Some(nearest(p))).unwrap_or(0.0)
+    protrusion_by(v, outside(grid), others, |p, _| Some(nearest(points, p))).unwrap_or(0.0)
+}
+
+/// The distance from `p` to the nearest of `points` (points of the surface or the solid: an
+/// upper bound of the distance to the surface from outside).
+fn nearest(points: &[DVec3], p: DVec3) -> f64 {
+    points
+        .iter()
+        .map(|&q| (q - p).length_squared())
+        .fold(f64::INFINITY, math::min)
+        .sqrt()
 }
 
 /// [`protrusion`] with the distance `dist`; `None` as soon as `dist` gives up. `dist(p,

@@ -69,15 +69,12 @@ pub(crate) struct Lattice {
 }
 
 impl Lattice {
-    /// Like [`Segmenter::new`], stopping when `cancel` is set: [`Segmenter::step`] then
-    /// returns `None` and [`Segmenter::finish`] [`Error::Cancelled`].
+    /// Sample the solid, for [`Segmenter::with_cancel`] (which has validated `params`).
     ///
     /// # Errors
     ///
-    /// As [`Segmenter::new`], and [`Error::Cancelled`] if `cancel` was set during sampling.
+    /// As [`Segmenter::with_cancel`].
     pub fn with_cancel(mesh: &Mesh, params: &Params, cancel: Cancel) -> Result<Self, Error> {
-        params.validate()?;
-        cancel.check()?;
         let grid = Grid::sampled(mesh, params.samples, params.sampling)?;
         cancel.check()?;
         if grid.len() < 8 {

@@ -35,7 +35,7 @@ pub fn triangles(atoms: &[Atom], members: &[usize]) -> Vec<u32> {
     t
 }
 
-/// The best cut of `c` in two, or `None` when it is one atom.
+/// The cut of `c` in two, or `None` when it is one atom.
 pub fn split(b: &Bounder, atoms: &[Atom], c: &Cluster) -> Option<[Cluster; 2]> {
     if c.atoms.len() < 2 {
         return None;
@@ -53,32 +53,25 @@ pub fn split(b: &Bounder, atoms: &[Atom], c: &Cluster) -> Option<[Cluster; 2]> {
         cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z) * atoms[a].area;
     }
     let (_, axes) = sym_eigen(cov);
-    let mut best: Option<(f64, [Cluster; 2])> = None;
-    // Across the longest spread only: slices of a closed piece hold its inside (strips along
-    // it would leave the middle of a tube empty), and one cut is a third of the fits.
-    for axis in [axes.x_axis] {
-        let mut order = c.atoms.clone();
-        let key = |a: usize| axis.dot(atoms[a].centroid);
-        order.sort_by(|&x, &y| key(x).total_cmp(&key(y)).then(x.cmp(&y)));
-        // At the area's median: both sides get about half of the surface.
-        let mut acc = 0.0;
-        let mut at = 1;
-        for (i, &a) in order.iter().enumerate() {
-            acc += atoms[a].area;
-            if acc >= 0.5 * weight {
-                at = (i + 1).clamp(1, order.len() - 1);
-                break;
-            }
-        }
-        let (lo, hi) = order.split_at(at);
-        let pair = [
-            Cluster::new(b, atoms, lo.to_vec(), c.bone),
-            Cluster::new(b, atoms, hi.to_vec(), c.bone),
-        ];
-        let size = pair[0].fit.volume.volume() + pair[1].fit.volume.volume();
-        if best.as_ref().is_none_or(|(s, _)| size < *s) {
-            best = Some((size, pair));
+    // Across the longest spread: slices of a closed piece hold its inside (strips along it
+    // would leave the middle of a tube empty).
+    let axis = axes.x_axis;
+    let key = |a: usize| axis.dot(atoms[a].centroid);
+    let mut order = c.atoms.clone();
+    order.sort_by(|&x, &y| key(x).total_cmp(&key(y)).then(x.cmp(&y)));
+    // At the area's median: both sides get about half of the surface.
+    let mut acc = 0.0;
+    let mut at = 1;
+    for (i, &a) in order.iter().enumerate() {
+        acc += atoms[a].area;
+        if acc >= 0.5 * weight {
+            at = (i + 1).clamp(1, order.len() - 1);
+            break;
         }
     }
-    best.map(|(_, p)| p)
+    let (lo, hi) = order.split_at(at);
+    Some([
+        Cluster::new(b, atoms, lo.to_vec(), c.bone),
+        Cluster::new(b, atoms, hi.to_vec(), c.bone),
+    ])
 }
